@@ -1,0 +1,340 @@
+"""The networks of the learning agent, as flax.linen modules.
+
+- `VAE`: the vision model (paper 3.2, eq. 1/5). Encoder = the paper's convolutions
+  32-64-128-256, kernel 4, stride 2, no padding (Ha & Schmidhuber), then mean and
+  log-variance heads. Decoder = one 4x4 stride-2 transposed convolution per encoder layer
+  (DCGAN / H&S style), each computed as a 2x2 convolution to 4x the channels followed by
+  depth-to-space: that *is* a stride-2 transposed convolution with a 4x4 kernel (same
+  parameters and receptive field; only the alignment of the output grid differs) but its
+  gradient costs a plain convolution instead of XLA CPU's slow lhs-dilated one.
+- `MDNRNN`: the memory model (eq. 2/6): an LSTM over every agent's latent and one-hot
+  action, with a mixture-density head giving, per agent and per latent dimension, a
+  Gaussian mixture over the next latent (Ha & Schmidhuber's MDN-RNN).
+- `SelfModel`: one agent's self-model (eq. 4): an MLP from (z_i, h) to the predicted
+  curiosity of each of the 7 actions. Agents own separate parameters: world_model.py
+  stacks them along a leading agent axis and vmaps.
+
+All modules take unbatched or batched inputs as documented; parameters are plain pytrees,
+so everything vmaps over a leading runs axis of parameters.
+
+Speed notes (2-core CPU, jax 0.10.2, see learner_bench.py): every strided convolution is
+rewritten as space-to-depth + a stride-1 2x2 convolution (`conv2x2`) whose backward pass
+is hand-written: the input gradient is another plain convolution and the kernel gradient
+four matmuls. XLA's own gradients of strided / transposed convolutions go through
+lhs-dilated or image-sized-window convolutions that run 2-6x slower here.
+"""
+
+from __future__ import annotations
+
+from typing import NamedTuple
+
+import flax.linen as nn
+import jax
+import jax.numpy as jnp
+import numpy as np
+from jax import lax
+
+_DN = ("NHWC", "HWIO", "NHWC")
+
+# log-std bounds of the mixture components: keeps the NLL finite when a transition is
+# deterministic (std would otherwise shrink without bound) and the density sane at init.
+LOGSTD_MIN = -7.0
+LOGSTD_MAX = 3.0
+
+
+# ----------------------------------------------------------------------------------------
+# Initialisation
+# ----------------------------------------------------------------------------------------
+
+
+def init_params(module: nn.Module, key, *args, method=None):
+    """Parameters of `module` with flax's default initialisers (kernels lecun-normal,
+    i.e. truncated normal with std 1/sqrt(fan_in); biases zero), drawn in ONE random call.
+
+    Why not `module.init`: it draws every kernel with its own threefry call, and XLA CPU
+    (LLVM -O3) took ~10 s to compile the ~20 of them for the learner; one flat draw
+    compiles in well under a second. `args` are example inputs (only shapes matter).
+    """
+    shapes = jax.eval_shape(lambda: module.init(jax.random.PRNGKey(0), *args, method=method))["params"]
+    leaves, treedef = jax.tree_util.tree_flatten_with_path(shapes)
+    is_kernel = [getattr(path[-1], "key", None) == "kernel" for path, _ in leaves]
+    sizes = [int(np.prod(leaf.shape)) if k else 0 for (_, leaf), k in zip(leaves, is_kernel)]
+    flat = jax.random.truncated_normal(key, -2.0, 2.0, (max(sum(sizes), 1),), jnp.float32)
+    out, offset = [], 0
+    for (_, leaf), k, n in zip(leaves, is_kernel, sizes):
+        if k:
+            fan_in = int(np.prod(leaf.shape[:-1]))
+            # 0.8796...: std of a unit normal truncated to [-2, 2] (flax's correction)
+            scale = 1.0 / np.sqrt(fan_in) / 0.87962566103423978
+            out.append(flat[offset : offset + n].reshape(leaf.shape).astype(leaf.dtype) * scale)
+            offset += n
+        else:
+            out.append(jnp.zeros(leaf.shape, leaf.dtype))
+    return jax.tree_util.tree_unflatten(treedef, out)
+
+
+# ----------------------------------------------------------------------------------------
+# Convolution building blocks
+# ----------------------------------------------------------------------------------------
+
+
+def _conv2x2_forward(x, w):
+    if jax.default_backend() == "cpu":
+        # XLA CPU hands a convolution to YNNPACK unless its output is larger than its
+        # input in some spatial dimension (xla/backends/cpu/ynn_support.cc); YNNPACK's
+        # convolution ran ~2x slower than Eigen's on these shapes on 2 cores. Padding
+        # the rows by one on each side routes it to Eigen; the two extra output rows
+        # are sliced off (1/(H-1) extra work).
+        y = lax.conv_general_dilated(x, w, (1, 1), ((1, 1), (0, 0)), dimension_numbers=_DN)
+        return y[:, 1:-1]
+    return lax.conv_general_dilated(x, w, (1, 1), "VALID", dimension_numbers=_DN)
+
+
+@jax.custom_vjp
+def conv2x2(x, w):
+    """VALID 2x2 stride-1 convolution, NHWC: x [B,H,W,C], w [2,2,C,O] -> [B,H-1,W-1,O]."""
+    return _conv2x2_forward(x, w)
+
+
+def _conv2x2_fwd(x, w):
+    return _conv2x2_forward(x, w), (x, w)
+
+
+def _conv2x2_bwd(res, dy):
+    x, w = res
+    # d/dx: "full" convolution of dy with the flipped, transposed kernel (a plain conv).
+    wt = jnp.flip(w, (0, 1)).swapaxes(2, 3)
+    dx = lax.conv_general_dilated(dy, wt, (1, 1), ((1, 1), (1, 1)), dimension_numbers=_DN)
+    # d/dw: one matmul per kernel tap, contracting over batch and pixels.
+    oh, ow, cin, cout = dy.shape[1], dy.shape[2], x.shape[-1], dy.shape[-1]
+    d2 = dy.reshape(-1, cout)
+    dw = jnp.stack(
+        [
+            jnp.einsum("nc,no->co", x[:, i : i + oh, j : j + ow].reshape(-1, cin), d2)
+            for i in range(2)
+            for j in range(2)
+        ]
+    ).reshape(w.shape)
+    return dx, dw
+
+
+conv2x2.defvjp(_conv2x2_fwd, _conv2x2_bwd)
+
+
+def space_to_depth(x):
+    """[B,H,W,C] -> [B,H//2,W//2,4C], channel order (row phase, column phase, C).
+
+    An odd last row/column is dropped: a 4x4 stride-2 VALID convolution never reads it.
+    """
+    b, h, w, c = x.shape
+    h2, w2 = h // 2, w // 2
+    x = x[:, : 2 * h2, : 2 * w2]
+    return x.reshape(b, h2, 2, w2, 2, c).transpose(0, 1, 3, 2, 4, 5).reshape(b, h2, w2, 4 * c)
+
+
+def depth_to_space(x):
+    """[B,H,W,4C] -> [B,2H,2W,C]; inverse of `space_to_depth` on even sizes."""
+    b, h, w, c4 = x.shape
+    c = c4 // 4
+    return x.reshape(b, h, w, 2, 2, c).transpose(0, 1, 3, 2, 4, 5).reshape(b, 2 * h, 2 * w, c)
+
+
+def kernel4_to_s2d(w4):
+    """A 4x4 kernel [4,4,C,O] as the equivalent 2x2 kernel over space-to-depth input."""
+    cin, cout = w4.shape[2], w4.shape[3]
+    # ky = 2*dy + py, kx = 2*dx + px  ->  w2[dy, dx, (py, px, c), o]
+    return w4.reshape(2, 2, 2, 2, cin, cout).transpose(0, 2, 1, 3, 4, 5).reshape(2, 2, 4 * cin, cout)
+
+
+def conv4x4_stride2(x, w4):
+    """VALID 4x4 stride-2 convolution (the paper's encoder layer) via space-to-depth."""
+    return conv2x2(space_to_depth(x), kernel4_to_s2d(w4))
+
+
+def upconv4x4_stride2(x, w):
+    """Stride-2 4x4 transposed convolution as a 2x2 conv to 4*O channels + depth-to-space.
+
+    x [B,H,W,C], w [2,2,C,4*O] -> [B,2H,2W,O].
+    """
+    x = jnp.pad(x, ((0, 0), (0, 1), (0, 1), (0, 0)))
+    return depth_to_space(conv2x2(x, w))
+
+
+class DownConv(nn.Module):
+    """The paper's encoder layer: conv kernel 4, stride 2, VALID, + bias."""
+
+    features: int
+
+    @nn.compact
+    def __call__(self, x):
+        w = self.param("kernel", nn.initializers.lecun_normal(), (4, 4, x.shape[-1], self.features))
+        b = self.param("bias", nn.initializers.zeros, (self.features,))
+        return conv4x4_stride2(x, w) + b
+
+
+class UpConv(nn.Module):
+    """Doubles the resolution: a stride-2 4x4 transposed conv, computed as conv + depth-to-space."""
+
+    features: int
+
+    @nn.compact
+    def __call__(self, x):
+        w = self.param("kernel", nn.initializers.lecun_normal(), (2, 2, x.shape[-1], 4 * self.features))
+        b = self.param("bias", nn.initializers.zeros, (4 * self.features,))
+        # bias before depth-to-space: a per-(phase, channel) bias, as in the transposed conv
+        return depth_to_space(conv2x2(jnp.pad(x, ((0, 0), (0, 1), (0, 1), (0, 0))), w) + b)
+
+
+# ----------------------------------------------------------------------------------------
+# VAE
+# ----------------------------------------------------------------------------------------
+
+
+def encoder_sizes(image: int, n_channels: int) -> list[int]:
+    """Spatial sizes after each encoder layer: as many of the paper's layers as fit.
+
+    A layer is used while its output is at least 2x2 (64 -> 31, 14, 6, 2: all four;
+    16 -> 7, 2: two; 8 -> 3: one), so tiny test images get a shallower encoder.
+    """
+    sizes, s = [], image
+    for _ in range(n_channels):
+        nxt = (s - 4) // 2 + 1
+        if nxt < 2:
+            break
+        sizes.append(nxt)
+        s = nxt
+    if not sizes:
+        raise ValueError(f"image {image} is too small for a 4x4 stride-2 encoder")
+    return sizes
+
+
+class VAE(nn.Module):
+    image: int = 64
+    latent: int = 32
+    channels: tuple = (32, 64, 128, 256)
+    dec_channels: tuple = (128, 64, 32, 16)
+
+    @property
+    def n_layers(self) -> int:
+        return len(encoder_sizes(self.image, len(self.channels)))
+
+    def setup(self):
+        n = self.n_layers
+        self.down = [DownConv(c) for c in self.channels[:n]]
+        self.heads = nn.Dense(2 * self.latent)  # mean and log-variance
+        # mirror: decoder widths for the n layers used, from the coarse end
+        self.dec = tuple(self.dec_channels[len(self.dec_channels) - n :])
+        self.start = self.image // 2**n  # 4 for 8..64 px
+        self.fc = nn.Dense(self.start * self.start * self.dec[0])
+        self.up = [UpConv(c) for c in self.dec[1:]] + [UpConv(3)]
+
+    def encode(self, frames):
+        """frames uint8 (or float in [0,1]) [B,H,W,3] -> (mu, logvar), each [B,latent]."""
+        x = frames.astype(jnp.float32)
+        if jnp.issubdtype(frames.dtype, jnp.integer):
+            x = x * (1.0 / 255.0)
+        for layer in self.down:
+            x = nn.relu(layer(x))
+        out = self.heads(x.reshape(x.shape[0], -1))
+        return out[:, : self.latent], out[:, self.latent :]
+
+    def decode(self, z):
+        """z [B,latent] -> images [B,H,W,3] in [0,1]."""
+        x = nn.relu(self.fc(z)).reshape(z.shape[0], self.start, self.start, self.dec[0])
+        for i, layer in enumerate(self.up):
+            x = layer(x)
+            if i < len(self.up) - 1:
+                x = nn.relu(x)
+        return nn.sigmoid(x)
+
+    def __call__(self, frames, key):
+        """Encode, sample z with the reparameterisation trick, decode."""
+        mu, logvar = self.encode(frames)
+        z = mu + jnp.exp(0.5 * logvar) * jax.random.normal(key, mu.shape, mu.dtype)
+        return self.decode(z), mu, logvar
+
+
+# ----------------------------------------------------------------------------------------
+# MDN-RNN
+# ----------------------------------------------------------------------------------------
+
+
+class Mixture(NamedTuple):
+    """Per-agent, per-dimension Gaussian mixtures; each field [..., n_agents, latent, K]."""
+
+    log_pi: jax.Array  # log mixture weights (normalised over K)
+    mu: jax.Array
+    log_std: jax.Array
+
+
+class MDNRNN(nn.Module):
+    """LSTM over (z of all agents, one-hot actions of all agents) + mixture-density head.
+
+    `__call__` is one step on unbatched inputs: carry = (c, h), each [hidden];
+    z [n_agents, latent]; a int [n_agents]. Returns (new carry, Mixture for z_{t+1}).
+
+    The step is split into `input_gates` (the input's contribution to the four gates),
+    `cell` (recurrence) and `mixture` (head) so a training sequence computes the input
+    gates and the head for all steps in one matmul each, outside the time loop; only
+    h @ W_h stays inside it (world_model.rnn_sequence).
+    """
+
+    n_agents: int = 2
+    latent: int = 32
+    mixtures: int = 5
+    hidden: int = 256
+    n_actions: int = 7
+
+    def setup(self):
+        self.in_gates = nn.Dense(4 * self.hidden)  # [z_1..z_n, onehot(a_1)..onehot(a_n)] -> gates
+        self.rec_gates = nn.Dense(4 * self.hidden, use_bias=False)  # h -> gates
+        self.head = nn.Dense(self.n_agents * self.latent * self.mixtures * 3)
+
+    def input_gates(self, z, a):
+        """z [..., n_agents, latent], a int [..., n_agents] -> [..., 4*hidden]."""
+        lead = z.shape[:-2]
+        x = jnp.concatenate(
+            [
+                z.reshape(lead + (-1,)),
+                jax.nn.one_hot(a, self.n_actions, dtype=z.dtype).reshape(lead + (-1,)),
+            ],
+            axis=-1,
+        )
+        return self.in_gates(x)
+
+    def cell(self, carry, gx):
+        """One LSTM step from precomputed input gates gx [..., 4*hidden]."""
+        c, h = carry
+        i, f, g, o = jnp.split(gx + self.rec_gates(h), 4, axis=-1)
+        c = nn.sigmoid(f) * c + nn.sigmoid(i) * jnp.tanh(g)
+        h = nn.sigmoid(o) * jnp.tanh(c)
+        return (c, h)
+
+    def mixture(self, h):
+        """h [..., hidden] -> Mixture, fields [..., n_agents, latent, K]."""
+        out = self.head(h).reshape(h.shape[:-1] + (self.n_agents, self.latent, self.mixtures, 3))
+        log_pi = jax.nn.log_softmax(out[..., 0], axis=-1)
+        log_std = jnp.clip(out[..., 2], LOGSTD_MIN, LOGSTD_MAX)
+        return Mixture(log_pi, out[..., 1], log_std)
+
+    def __call__(self, carry, z, a):
+        carry = self.cell(carry, self.input_gates(z, a))
+        return carry, self.mixture(carry[1])
+
+
+# ----------------------------------------------------------------------------------------
+# Self-model
+# ----------------------------------------------------------------------------------------
+
+
+class SelfModel(nn.Module):
+    """One agent's self-model: (z_i [latent], h [hidden]) -> predicted curiosity [n_actions]."""
+
+    hidden: int = 256
+    n_actions: int = 7
+
+    @nn.compact
+    def __call__(self, z, h):
+        x = jnp.concatenate([z, h], axis=-1)
+        x = nn.relu(nn.Dense(self.hidden)(x))
+        return nn.Dense(self.n_actions)(x)

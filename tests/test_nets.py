@@ -1,0 +1,172 @@
+"""Networks: the convolution rewrites are exact, the VAE learns, self-models are per agent."""
+
+import mjx_curio  # noqa: F401  (XLA flags before JAX initialises)
+
+import jax
+import jax.numpy as jnp
+import numpy as np
+import optax
+import pytest
+from jax import lax
+
+from mjx_curio import nets
+from mjx_curio import world_model as wm
+from mjx_curio.config import ConfigError, LearnerConfig
+
+DN = ("NHWC", "HWIO", "NHWC")
+
+
+def test_conv4x4_stride2_matches_xla_strided_conv_values_and_gradients():
+    def ref(x, k):
+        return lax.conv_general_dilated(x, k, (2, 2), "VALID", dimension_numbers=DN)
+
+    @jax.jit
+    def both(x, k):
+        out = []
+        for f in (nets.conv4x4_stride2, ref):
+            y, vjp = jax.vjp(f, x, k)
+            out.append((y,) + vjp(jnp.sin(y)))
+        return out
+
+    # odd and even sizes: the space-to-depth rewrite must drop exactly the unread row/col
+    for h, w in [(16, 16), (15, 13)]:
+        rng = np.random.default_rng(h * 100 + w)  # numpy inputs: no per-shape RNG compiles
+        x = rng.standard_normal((2, h, w, 5), np.float32)
+        k4 = rng.standard_normal((4, 4, 5, 6), np.float32)
+        new, old = both(x, k4)
+        assert new[0].shape == old[0].shape == (2, (h - 4) // 2 + 1, (w - 4) // 2 + 1, 6)
+        for a, b in zip(new, old):
+            np.testing.assert_allclose(a, b, rtol=1e-3, atol=1e-3)
+
+
+def test_conv2x2_custom_gradient_matches_autodiff():
+    rng = np.random.default_rng(3)
+    x = rng.standard_normal((3, 9, 7, 4), np.float32)
+    w = rng.standard_normal((2, 2, 4, 8), np.float32)
+    dy = rng.standard_normal((3, 8, 6, 8), np.float32)
+    ref = lambda x, w: lax.conv_general_dilated(x, w, (1, 1), "VALID", dimension_numbers=DN)  # noqa: E731
+    def fwd_bwd(f):
+        return jax.jit(lambda x, w, dy: (lambda y, vjp: (y,) + vjp(dy))(*jax.vjp(f, x, w)))(x, w, dy)
+
+    for a, b in zip(fwd_bwd(nets.conv2x2), fwd_bwd(ref)):
+        np.testing.assert_allclose(a, b, rtol=1e-4, atol=1e-3)
+
+
+def test_space_to_depth_roundtrip_and_upconv_doubles_resolution():
+    x = np.random.default_rng(0).standard_normal((2, 8, 6, 3), np.float32)
+    np.testing.assert_array_equal(nets.depth_to_space(nets.space_to_depth(x)), x)
+    y = nets.upconv4x4_stride2(jnp.ones((2, 4, 4, 5)), jnp.ones((2, 2, 5, 4 * 3)))
+    assert y.shape == (2, 8, 8, 3)
+
+
+def test_encoder_depth_follows_image_size():
+    assert nets.encoder_sizes(64, 4) == [31, 14, 6, 2]  # the paper's four layers
+    assert nets.encoder_sizes(16, 4) == [7, 2]
+    assert nets.encoder_sizes(8, 4) == [3]
+
+
+def _frames(rng, n, size=16):
+    """Coloured rectangles and discs on a checkered background, uint8 [n, size, size, 3]."""
+    yy, xx = np.mgrid[:size, :size]
+    tile = max(size // 4, 1)
+    checker = ((yy // tile + xx // tile) % 2).astype(bool)
+    out = np.empty((n, size, size, 3), np.uint8)
+    for i in range(n):
+        img = np.where(checker[..., None], [90, 90, 100], [40, 60, 170]).astype(np.float64)
+        for _ in range(rng.integers(1, 3)):
+            colour = rng.choice([[230, 30, 30], [240, 200, 20], [30, 220, 60], [250, 140, 0]])
+            cy, cx = rng.uniform(2, size - 2, 2)
+            r = rng.uniform(size / 8, size / 4)
+            if rng.random() < 0.5:
+                mask = (yy - cy) ** 2 + (xx - cx) ** 2 <= r * r
+            else:
+                mask = (np.abs(yy - cy) <= r) & (np.abs(xx - cx) <= r * 0.7)
+            img[mask] = colour
+        out[i] = img
+    return out
+
+
+def test_vae_shapes_and_output_range():
+    cfg = LearnerConfig(image=16, n_agents=1)
+    st = wm.init_learner(cfg, jax.random.PRNGKey(0))
+    frames = jnp.asarray(_frames(np.random.default_rng(0), 3))
+    mu, logvar = jax.jit(lambda p, f: wm.encode(cfg, p, f))(st.vae, frames)
+    assert mu.shape == logvar.shape == (3, cfg.latent)
+    z = 10.0 * np.random.default_rng(1).standard_normal((3, cfg.latent), np.float32)
+    img = jax.jit(lambda p, z: wm.decode(cfg, p, z))(st.vae, z)
+    assert img.shape == (3, 16, 16, 3)
+    assert float(img.min()) >= 0.0 and float(img.max()) <= 1.0
+
+
+def test_vae_reconstruction_loss_falls_on_structured_frames():
+    cfg = LearnerConfig(image=16, n_agents=1)
+    rng = np.random.default_rng(1)
+    train = jnp.asarray(_frames(rng, 512))[:, None]  # [N, 1 agent, H, W, 3]
+    held = jnp.asarray(_frames(rng, 64))[:, None]
+    st = wm.init_learner(cfg, jax.random.PRNGKey(0))
+    opt = wm.optimizer(cfg)
+
+    @jax.jit
+    def step(p, s, idx, i):
+        key = jax.random.fold_in(jax.random.PRNGKey(2), i)
+        (_, aux), g = jax.value_and_grad(lambda p: wm.vae_loss(cfg, p, train[idx], key), has_aux=True)(p)
+        u, s = opt.update(g, s, p)
+        return optax.apply_updates(p, u), s
+
+    @jax.jit
+    def recon(p):
+        mu, _ = wm.encode(cfg, p, held[:, 0])
+        return jnp.mean(jnp.sum((wm.decode(cfg, p, mu) - held[:, 0] / 255.0) ** 2, axis=(1, 2, 3)))
+
+    p, s = st.vae, st.vae_opt
+    before = float(recon(p))
+    for i in range(600):
+        p, s = step(p, s, rng.integers(0, train.shape[0], 32), i)
+    after = float(recon(p))
+    # the mean image is the best reconstruction that ignores the input frame
+    mean_img = jnp.mean(train[:, 0] / 255.0, axis=0)
+    mean_baseline = float(jnp.mean(jnp.sum((mean_img - held[:, 0] / 255.0) ** 2, axis=(1, 2, 3))))
+    print(f"recon before {before:.2f} after {after:.2f} mean-image baseline {mean_baseline:.2f}")
+    assert after < 0.35 * before, (before, after)
+    assert after < 0.6 * mean_baseline, (after, mean_baseline)
+
+
+def test_self_models_have_separate_parameters_per_agent():
+    cfg = LearnerConfig(image=8, n_agents=2, latent=4, rnn_hidden=8, self_hidden=16)
+    st = wm.init_learner(cfg, jax.random.PRNGKey(0))
+    for leaf in jax.tree.leaves(st.self_model):
+        assert leaf.shape[0] == 2
+    k = st.self_model["Dense_0"]["kernel"]
+    assert not np.allclose(k[0], k[1])  # independent initialisations
+    rng = np.random.default_rng(1)
+    z = rng.standard_normal((2, 4), np.float32)
+    h = rng.standard_normal((8,), np.float32)
+    predict = jax.jit(lambda p, z, h: wm.predict_curiosity(cfg, p, z, h))
+    q = predict(st.self_model, z, h)
+    assert q.shape == (2, 7)
+    # changing agent 1's parameters leaves agent 0's predictions alone
+    other = jax.tree.map(lambda x: x.at[1].multiply(3.0), st.self_model)
+    q2 = predict(other, z, h)
+    np.testing.assert_allclose(q2[0], q[0])
+    assert not np.allclose(q2[1], q[1])
+
+
+@pytest.mark.parametrize(
+    "kw, knob",
+    [
+        (dict(latent=0), "latent"),
+        (dict(latent=-3), "latent"),
+        (dict(mixtures=0), "mixtures"),
+        (dict(rnn_hidden=0), "rnn_hidden"),
+        (dict(self_hidden=0), "self_hidden"),
+        (dict(vae_channels=(32, 0, 128, 256)), "vae_channels"),
+        (dict(seq_len=1), "seq_len"),
+        (dict(batch=0), "batch"),
+        (dict(image=48), "image"),
+        (dict(n_agents=3), "n_agents"),
+        (dict(latents="fresh"), "latents"),
+    ],
+)
+def test_learner_config_rejects_bad_values(kw, knob):
+    with pytest.raises(ConfigError, match=knob):
+        LearnerConfig(**kw)
