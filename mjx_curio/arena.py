@@ -21,7 +21,9 @@ in the paper's code that set angular velocity directly.
 
 from __future__ import annotations
 
+import contextlib
 import dataclasses
+import io
 import pathlib
 from typing import Any
 
@@ -30,7 +32,11 @@ import jax.numpy as jnp
 import mujoco
 import numpy as np
 from flax import struct
-from mujoco import mjx
+
+with contextlib.redirect_stdout(io.StringIO()):
+    # mujoco.mjx prints "Failed to import warp" on stdout when the optional MuJoCo Warp (CUDA)
+    # backend is absent, as it always is on a CPU; this project uses MJX's JAX backend only.
+    from mujoco import mjx
 
 from mjx_curio import render as render_lib
 from mjx_curio.config import ConfigError, check_choice, check_float, check_int
@@ -135,8 +141,10 @@ class Arena:
             )
             adr = self.object_qpos[:, None] + np.arange(2)[None, :]
             qpos = qpos.at[adr].add(offsets)
-        data = mjx.make_data(self.model).replace(qpos=qpos)
-        data = mjx.forward(self.model, data)
+        # Kinematics (poses for the renderer) rather than a full forward: mjx.step runs its own
+        # forward first, and kinematics compiles in ~2 s where forward's collision and solver
+        # take ~25 s on the CPU.
+        data = mjx.kinematics(self.model, mjx.make_data(self.model).replace(qpos=qpos))
         return EnvState(
             data=data,
             step=jnp.zeros((), jnp.int32),
@@ -221,8 +229,15 @@ def _make(walls: str, n_agents: int, image: int, jitter: float) -> Arena:
     # One Arena per configuration, so jitted functions closing over it are
     # traced once per process (tests build the same arena many times).
     key = (walls, n_agents, image, jitter)
-    if key in _CACHE:
-        return _CACHE[key]
+    if key not in _CACHE:
+        # Built eagerly even when first asked for inside a jit trace (run.py builds it from its
+        # config there): the contact tables below need concrete values.
+        with jax.ensure_compile_time_eval():
+            _CACHE[key] = _build(walls, n_agents, image, jitter)
+    return _CACHE[key]
+
+
+def _build(walls: str, n_agents: int, image: int, jitter: float) -> Arena:
     m = mujoco.MjModel.from_xml_path(str(scene_path(walls, n_agents)))
     name = lambda kind, n: mujoco.mj_name2id(m, kind, n)  # noqa: E731
     B, G, J = mujoco.mjtObj.mjOBJ_BODY, mujoco.mjtObj.mjOBJ_GEOM, mujoco.mjtObj.mjOBJ_JOINT
@@ -264,14 +279,12 @@ def _make(walls: str, n_agents: int, image: int, jitter: float) -> Arena:
         contact_agent=contact_agent,
         renderer=renderer,
     )
-    _CACHE[key] = arena
     return arena
 
 
 def _contact_tables(m: mujoco.MjModel, model: mjx.Model, agents) -> tuple[np.ndarray, np.ndarray]:
     """Which agent/object each slot of MJX's fixed contact list belongs to."""
-    data = jax.jit(mjx.forward)(model, mjx.make_data(model))
-    geoms = np.asarray(data._impl.contact.geom)  # [n_contacts, 2]
+    geoms = _contact_layout(m, model)  # [n_contacts, 2]
     body_of = m.geom_bodyid
     agent_of_body = {mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_BODY, a): i for i, a in enumerate(agents)}
     object_of_body = {mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_BODY, o): k for k, o in enumerate(OBJECTS)}
@@ -288,6 +301,30 @@ def _contact_tables(m: mujoco.MjModel, model: mjx.Model, agents) -> tuple[np.nda
                 if bb in agent_of_body:
                     other[c, i] = 1
     return obj, other
+
+
+def _contact_layout(m: mujoco.MjModel, model: mjx.Model) -> np.ndarray:
+    """The geom pair of every slot of MJX's contact list, [n_contacts, 2].
+
+    MJX lays the list out from static model data (mjx/_src/collision_driver.py): geom pairs
+    grouped by collision function, <pair> rows before others within a group, each repeated by its
+    function's contact count, groups concatenated by condim. Reading that layout costs nothing;
+    running a forward pass to observe it costs a ~25 s compile. If MJX's internals change, fall
+    back to observing it (tests/test_arena.py checks the two agree).
+    """
+    try:
+        from mujoco.mjx._src import collision_driver as cd
+
+        by_condim: dict[int, list] = {}
+        for key, rows in cd._geom_groups(m).items():
+            rows = np.asarray(rows)
+            geom, pair = rows[:, :2], rows[:, 2]
+            geom = np.concatenate([geom[pair != -1], geom[pair == -1]])
+            by_condim.setdefault(int(key.condim), []).append(np.repeat(geom, cd._COLLISION_FUNC[key.types].ncon, axis=0))
+        return np.concatenate([g for k in sorted(by_condim) for g in by_condim[k]])
+    except (ImportError, AttributeError, KeyError):
+        data = jax.jit(mjx.forward)(model, mjx.make_data(model))
+        return np.asarray(data._impl.contact.geom)
 
 
 def validate(walls: str, n_agents: int, image: int) -> None:

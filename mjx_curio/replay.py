@@ -69,21 +69,32 @@ def init_for(cfg, capacity: int = DEFAULT_CAPACITY) -> Replay:
     return init(cfg.n_agents, cfg.image, cfg.latent, cfg.rnn_hidden, capacity)
 
 
-def add(buffer: Replay, tr: Transition) -> Replay:
-    """Write one step at the head; the oldest step is overwritten once full."""
+def add(buffer: Replay, tr: Transition, enabled=True) -> Replay:
+    """Write one step at the head; the oldest step is overwritten once full.
+
+    `enabled` (a traced bool) False leaves the buffer as it was: the slot is rewritten with its
+    own content and the head does not move. A run that must not advance (run.py halts a run
+    whose loss went non-finite) uses it instead of selecting between two whole buffers, which
+    would copy the buffer every step.
+    """
     i = buffer.index
     cap = buffer.capacity
+    gate = enabled is not True
 
     def put(store, value):
-        return jax.lax.dynamic_update_index_in_dim(store, jnp.asarray(value, store.dtype), i, axis=0)
+        value = jnp.asarray(value, store.dtype)
+        if gate:
+            value = jnp.where(enabled, value, jax.lax.dynamic_index_in_dim(store, i, keepdims=False))
+        return jax.lax.dynamic_update_index_in_dim(store, value, i, axis=0)
 
+    advance = jnp.asarray(enabled, jnp.int32) if gate else 1
     return Replay(
         frames=put(buffer.frames, tr.frames),
         latents=put(buffer.latents, tr.latents),
         actions=put(buffer.actions, tr.actions),
         carry=jax.tree.map(put, buffer.carry, tuple(tr.carry)),
-        index=(i + 1) % cap,
-        size=jnp.minimum(buffer.size + 1, cap),
+        index=(i + advance) % cap,
+        size=jnp.minimum(buffer.size + advance, cap),
     )
 
 

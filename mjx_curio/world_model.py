@@ -254,7 +254,7 @@ def learner_update(cfg: LearnerConfig, state: LearnerState, batch: Batch, key):
       latents (cfg.latents == "stored") or the frames re-encoded by the current VAE.
     - Self-models: targets = curiosity of the sampled transitions under the current
       MDN-RNN (stop-gradient), inputs (z_t^i, h_t), trained on the actions actually taken.
-    Returns (new state, metrics dict of scalars).
+    Returns (new state, metrics dict: scalars, and `self_loss_agents` [n_agents]).
     """
     opt = optimizer(cfg)
     k_frame, k_vae = jax.random.split(key)
@@ -305,6 +305,7 @@ def learner_update(cfg: LearnerConfig, state: LearnerState, batch: Batch, key):
         "kl": kl,
         "nll": nll,
         "self_loss": self_l,
+        "self_loss_agents": per_agent,  # [n_agents]
         "curiosity": jnp.mean(cur),
     }
     return new, metrics

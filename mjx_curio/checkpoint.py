@@ -1,0 +1,195 @@
+"""Orbax checkpoints of a sweep: save, find the newest complete one, restore.
+
+Layout under `<sweep>/checkpoints/`:
+    state/<step>/    every run's RunState without its replay buffer: networks, optimiser
+                     states, MDN-RNN memory, current views and latents, UCB counts, RNG keys,
+                     arena state, counters. Small (about 20 MB a run at the paper's sizes).
+                     Kept: the newest `keep_last`, every multiple of `keep_every`, and `keep_steps`
+                     (early steps for the notebook's early-versus-late reconstructions).
+    replay/<step>/   every run's replay buffer (about 245 MB a run at 64 x 64 and 10,000 steps),
+                     newest only. Absent when the sweep runs with save_replay=false.
+
+Orbax writes each item into a temporary directory and renames it when complete, so a process
+killed mid-write leaves no half checkpoint that looks whole. A checkpoint is complete when its
+state, and (unless save_replay=false) its replay, both exist; `latest_complete` returns the
+newest such step, so a kill between the two writes falls back to the previous checkpoint.
+"""
+
+from __future__ import annotations
+
+import math
+import os
+import pathlib
+import shutil
+import signal
+
+import jax
+import orbax.checkpoint as ocp
+from orbax.checkpoint.checkpoint_managers import preservation_policy as pp
+
+from mjx_curio import run as run_lib
+
+# Fault injection for tests/test_sweep.py: "<point>:<step>" kills this process with SIGKILL at
+# that point of saving checkpoint <step>. The only point: "after-state" (state written, replay not).
+CRASH_ENV = "MJX_CURIO_CRASH_AT"
+
+
+class Checkpoints:
+    def __init__(
+        self,
+        directory: pathlib.Path,
+        save_replay: bool = True,
+        keep_last: int = 2,
+        keep_every: int | None = None,
+        keep_steps: tuple = (),
+        read_only: bool = False,
+    ):
+        self.directory = pathlib.Path(directory)
+        self.save_replay = save_replay
+        policies = [pp.LatestN(keep_last)]
+        if keep_every:
+            policies.append(pp.EveryNSteps(keep_every))
+        if keep_steps:
+            policies.append(pp.CustomSteps(list(keep_steps)))
+        self.state = self._manager("state", pp.AnyPreservationPolicy(policies), read_only)
+        replay_dir = self.directory / "replay"
+        self.replay = None
+        if save_replay or replay_dir.exists():
+            self.replay = self._manager("replay", pp.LatestN(1), read_only)
+
+    def _manager(self, name: str, policy, read_only: bool) -> ocp.CheckpointManager:
+        options = ocp.CheckpointManagerOptions(
+            preservation_policy=policy,
+            enable_async_checkpointing=False,  # the sweep waits anyway; simpler failure modes
+            create=not read_only,
+            read_only=read_only,
+        )
+        return ocp.CheckpointManager((self.directory / name).absolute(), options=options)
+
+    # ------------------------------------------------------------------------------ save
+
+    def save(self, step: int, states: run_lib.RunState) -> None:
+        state, replay = run_lib.split_replay(states)
+        self.state.save(step, args=ocp.args.StandardSave(to_nested(state)))
+        self.state.wait_until_finished()
+        _maybe_crash("after-state", step)
+        if self.save_replay:
+            self.replay.save(step, args=ocp.args.StandardSave(to_nested(replay)))
+            self.replay.wait_until_finished()
+
+    # ------------------------------------------------------------------------------ find
+
+    def state_steps(self) -> list[int]:
+        self.state.reload()
+        return sorted(self.state.all_steps())
+
+    def replay_steps(self) -> list[int]:
+        if self.replay is None:
+            return []
+        self.replay.reload()
+        return sorted(self.replay.all_steps())
+
+    def latest_complete(self) -> int | None:
+        steps = set(self.state_steps())
+        if self.save_replay:
+            steps &= set(self.replay_steps())
+        return max(steps) if steps else None
+
+    def drop_after(self, step: int) -> list[int]:
+        """Delete checkpoints newer than `step` (left incomplete by a crash; a resumed sweep
+        rewrites them identically). Returns the steps removed."""
+        removed = []
+        for mgr in (self.state, self.replay):
+            if mgr is None:
+                continue
+            for s in mgr.all_steps():
+                if s > step:
+                    mgr.delete(s)
+                    removed.append(s)
+        return sorted(set(removed))
+
+    # ------------------------------------------------------------------------------ restore
+
+    def restore(self, step: int, abstract: run_lib.RunState, with_replay: bool = True) -> run_lib.RunState:
+        """The sweep state of checkpoint `step`, laid out like `abstract` (ShapeDtypeStructs with
+        shardings, e.g. from jax.eval_shape of the sweep's init). Without the replay (or when it
+        was not saved) the buffers come back as `abstract.replay` describes them: zeros."""
+        a_state, a_replay = run_lib.split_replay(abstract)
+        nested = self.state.restore(step, args=ocp.args.StandardRestore(to_nested(a_state)))
+        state = from_nested(nested, a_state)
+        if with_replay and self.replay is not None and step in self.replay.all_steps():
+            nested = self.replay.restore(step, args=ocp.args.StandardRestore(to_nested(a_replay)))
+            replay = from_nested(nested, a_replay)
+        else:
+            replay = jax.tree.map(lambda a: jax.numpy.zeros(a.shape, a.dtype, device=a.sharding), a_replay)
+        return run_lib.with_replay(state, replay)
+
+    def restore_raw(self, step: int) -> dict:
+        """Checkpoint `step`'s state as nested dicts of NumPy arrays, no target structure needed
+        (what analysis.py uses to decode with saved parameters)."""
+        return self.state.restore(step, args=ocp.args.StandardRestore())
+
+    def close(self) -> None:
+        self.state.close()
+        if self.replay is not None:
+            self.replay.close()
+
+
+def to_nested(tree) -> dict:
+    """A pytree as nested dicts keyed by field / key / index names, leaving out empty arrays.
+
+    Orbax refuses zero-size arrays, and MJX's Data has several (e.g. `act` in a model without
+    actuators); names keep the checkpoint readable without this package (e.g.
+    state/<step>/learner/vae/...). `from_nested` rebuilds the pytree from its abstract twin.
+    """
+    out: dict = {}
+    for path, leaf in jax.tree_util.tree_flatten_with_path(tree)[0]:
+        if _size(leaf) == 0:
+            continue
+        names = [_key_name(k) for k in path]
+        node = out
+        for name in names[:-1]:
+            node = node.setdefault(name, {})
+        node[names[-1]] = leaf
+    return out
+
+
+def from_nested(nested: dict, like):
+    """Inverse of `to_nested`: leaves of `like` (arrays or ShapeDtypeStructs) in order, taken
+    from `nested`, empty ones recreated as zeros."""
+    flat, treedef = jax.tree_util.tree_flatten_with_path(like)
+    leaves = []
+    for path, a in flat:
+        if _size(a) == 0:
+            leaves.append(jax.numpy.zeros(a.shape, a.dtype))
+            continue
+        node = nested
+        for k in path:
+            node = node[_key_name(k)]
+        leaves.append(node)
+    return jax.tree_util.tree_unflatten(treedef, leaves)
+
+
+def _size(x) -> int:
+    return int(math.prod(x.shape))
+
+
+def _key_name(k) -> str:
+    for attr in ("name", "key", "idx"):
+        if hasattr(k, attr):
+            return str(getattr(k, attr))
+    return str(k)
+
+
+def _maybe_crash(point: str, step: int) -> None:
+    spec = os.environ.get(CRASH_ENV, "")
+    if spec and spec == f"{point}:{step}":
+        os.kill(os.getpid(), signal.SIGKILL)
+
+
+def remove_tmp_dirs(directory: pathlib.Path) -> list[pathlib.Path]:
+    """Leftovers of writes killed mid-way (orbax's '*.orbax-checkpoint-tmp*' directories)."""
+    found = [p for p in pathlib.Path(directory).rglob("*") if p.is_dir() and "orbax-checkpoint-tmp" in p.name]
+    for p in found:
+        shutil.rmtree(p, ignore_errors=True)
+    return found

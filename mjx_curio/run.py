@@ -1,0 +1,361 @@
+"""One curious-agent run of the paper as pure functions, and many runs as one program.
+
+A run's whole state is a `RunState` pytree. One agent step (`act`) is: predict each action's
+curiosity with every agent's self-model, let each agent's policy pick, store the step in replay,
+advance the shared MDN-RNN memory, step the arena with all actions at once, render every agent's
+view, encode it, and score curiosity (eq. 3) against the MDN-RNN's prediction. Every
+`update_every` steps `learn` trains the VAE, the MDN-RNN and every self-model from one replay
+sample (paper 3.2-3.3, FACTS.md). `run_chunk` is a `lax.scan` of these and returns the chunk's
+metrics already reduced to windows of `metrics_every` steps.
+
+A sweep is a `RunState` with a leading runs axis. `sweep_chunk` advances every run; how the runs
+axis is traversed is `RunConfig.runs_loop`:
+- "map": one run after another inside the compiled program (an in-place `fori_loop` over the
+  runs axis). Every run then executes exactly the program of a run alone, so a run's results are
+  bit-identical alone, inside any sweep and on any number of devices. It is also the faster
+  choice on a CPU: vmapping convolutions whose kernels differ per run turns them into grouped
+  convolutions, which XLA CPU runs slower (measured: 149 ms against 108 ms per learner update,
+  `python -m mjx_curio.bench what=sweep`).
+- "vmap": all runs in lockstep, batched. What an accelerator wants; results agree with a run
+  alone to float rounding (about 1e-6 after one update), so trajectories can part after many
+  steps where an argmax flips.
+Across devices the runs axis is sharded with `shard_map` (sweep.py): each device advances its own
+runs, no communication, so sharding never changes a result.
+
+Ordering within a step t (carry_t = LSTM state before step t, z_t = encoding of o_t):
+    q_t = self-models(z_t, h_t); a_t = policy(q_t); replay <- (o_t, z_t, a_t, carry_t)
+    carry_t+1, mix_t = MDN-RNN(carry_t, z_t, a_t); world_t+1 = arena.step(world_t, a_t)
+    o_t+1 = render(world_t+1); z_t+1 = encode(o_t+1); r_t = ||z_t+1 - E[mix_t]||^2
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import functools
+from typing import Any, NamedTuple
+
+import jax
+import jax.numpy as jnp
+import numpy as np
+from jax import lax
+
+from mjx_curio import arena as arena_lib
+from mjx_curio import policies
+from mjx_curio import replay as replay_lib
+from mjx_curio import world_model as wm
+from mjx_curio.config import ConfigError, LearnerConfig, check_choice, check_float, check_int
+
+RUNS_LOOPS = ("map", "vmap")
+N_VIEW = len(arena_lib.OBJECTS) + 1  # view fractions: the four objects, then the other agent
+
+
+@dataclasses.dataclass(frozen=True)
+class RunConfig:
+    """Everything that fixes the shapes and the program of a run. Identical for every run of a
+    sweep; what varies between runs (seed, policy and its settings) lives in `RunState`."""
+
+    walls: str = "same"
+    n_agents: int = 2
+    image: int = 64
+    jitter: float = 0.0  # objects start up to this many metres from the paper's layout
+    buffer: int = 10_000  # replay capacity, in agent steps (FACTS.md)
+    update_every: int = 4  # agent steps per learner update (paper, section 5)
+    metrics_every: int = 20  # steps per metrics window (the paper samples every 20 steps)
+    runs_loop: str = "map"
+    learner: LearnerConfig = LearnerConfig()
+
+    def __post_init__(self):
+        arena_lib.validate(self.walls, self.n_agents, self.image)
+        check_float("jitter", self.jitter, 0.0, 1.0)
+        check_int("update_every", self.update_every, 1)
+        check_int("metrics_every", self.metrics_every, 1)
+        check_choice("runs_loop", self.runs_loop, RUNS_LOOPS)
+        if self.metrics_every % self.update_every:
+            raise ConfigError(
+                f"metrics_every={self.metrics_every} must be a multiple of update_every={self.update_every}, "
+                "so every metrics window holds whole learner updates"
+            )
+        if self.learner.image != self.image or self.learner.n_agents != self.n_agents:
+            raise ConfigError(
+                f"learner.image/n_agents ({self.learner.image}, {self.learner.n_agents}) must equal "
+                f"image/n_agents ({self.image}, {self.n_agents})"
+            )
+        check_int("buffer", self.buffer, self.learner.seq_len + 2)
+
+    @property
+    def arena(self) -> arena_lib.Arena:
+        return arena_lib.make(self.walls, self.n_agents, self.image, self.jitter)
+
+
+class RunState(NamedTuple):
+    env: arena_lib.EnvState
+    learner: wm.LearnerState
+    replay: replay_lib.Replay
+    carry: tuple  # (c, h) LSTM state before the current step, each [rnn_hidden]
+    frames: jax.Array  # uint8 [n_agents, H, W, 3], the current observation o_t
+    z: jax.Array  # f32 [n_agents, latent], its encoding (posterior mean)
+    counts: jax.Array  # int32 [n_agents, n_actions], UCB's N(a)
+    key: jax.Array  # uint32 [2], this run's random stream
+    step: jax.Array  # int32, agent steps taken
+    policy: policies.PolicyParams
+    halted: jax.Array  # bool: a loss went non-finite; the run is frozen at its last good state
+    halted_step: jax.Array  # int32, the step at which it halted, -1 if running
+
+
+# ------------------------------------------------------------------------------ one run
+
+
+def init_run(cfg: RunConfig, key: jax.Array, policy: policies.PolicyParams) -> RunState:
+    """A run at step 0: the arena reset, fresh networks, the first views rendered and encoded.
+    `key` (a raw uint32[2] PRNG key) alone decides everything random in the run."""
+    arena = cfg.arena
+    k_env, k_learn, k_run = jax.random.split(key, 3)
+    env = arena.reset(k_env)
+    learner = wm.init_learner(cfg.learner, k_learn)
+    frames, _ = arena.render(env)
+    z, _ = wm.encode(cfg.learner, learner.vae, frames)
+    lc = cfg.learner
+    return RunState(
+        env=env,
+        learner=learner,
+        replay=replay_lib.init_for(lc, cfg.buffer),
+        carry=wm.initial_carry(lc),
+        frames=frames,
+        z=z,
+        counts=jnp.zeros((cfg.n_agents, lc.n_actions), jnp.int32),
+        key=k_run,
+        step=jnp.zeros((), jnp.int32),
+        policy=policy,
+        halted=jnp.zeros((), bool),
+        halted_step=jnp.full((), -1, jnp.int32),
+    )
+
+
+def act(cfg: RunConfig, s: RunState) -> tuple[RunState, dict]:
+    """One agent step of every agent at once. Returns the new state and this step's metrics.
+
+    A halted run does not move: its small state is selected back and its replay buffer is left
+    untouched (`replay.add(..., enabled=False)`); its metrics are masked by `reduce_windows`."""
+    arena, lc = cfg.arena, cfg.learner
+    go = ~s.halted
+    k_policy, k_next = jax.random.split(s.key)
+    q = wm.predict_curiosity(lc, s.learner.self_model, s.z, s.carry[1])  # [n, A]
+    a = policies.select_agents(s.policy, q, k_policy, s.counts, s.step)
+    replay = replay_lib.add(s.replay, replay_lib.Transition(s.frames, s.z, a, s.carry), enabled=go)
+    carry, mix = wm.rnn_step(lc, s.learner.rnn, s.carry, s.z, a)
+    env = arena.step(s.env, a)
+    frames, geom_id = arena.render(env)
+    z, _ = wm.encode(lc, s.learner.vae, frames)
+    reward = wm.curiosity(z, mix)  # [n]
+    xy, yaw = arena.agent_pose(env)
+    metrics = {
+        "curiosity": reward,
+        "predicted": jnp.take_along_axis(q, a[:, None], axis=1)[:, 0],
+        "action": a,
+        "contact_object": env.touch,
+        "contact_agent": env.touch_agent,
+        "view_fraction": view_fractions(arena, geom_id),
+        "agent_pose": jnp.concatenate([xy, yaw[:, None]], axis=1),
+        "object_pos": arena.object_pos(env),
+    }
+    moved = (env, carry, frames, z, policies.update_counts_agents(s.counts, a), k_next, s.step + 1)
+    kept = (s.env, s.carry, s.frames, s.z, s.counts, s.key, s.step)
+    env, carry, frames, z, counts, key, step = jax.tree.map(lambda n, o: jnp.where(go, n, o), moved, kept)
+    new = s._replace(env=env, replay=replay, carry=carry, frames=frames, z=z, counts=counts, key=key, step=step)
+    return new, metrics
+
+
+def view_fractions(arena: arena_lib.Arena, geom_id: jax.Array) -> jax.Array:
+    """[n_agents, 5]: share of each agent's pixels showing each object, then the other agent."""
+    objects = jnp.asarray(arena.object_geoms)
+    frac = jnp.mean(geom_id[:, :, :, None] == objects, axis=(1, 2))  # [n, 4]
+    if arena.n_agents == 1:
+        other = jnp.zeros((1, 1), jnp.float32)
+    else:
+        others = jnp.asarray(arena.agent_geoms[::-1].copy())  # agent i sees agent 1 - i
+        other = jnp.mean(geom_id == others[:, None, None], axis=(1, 2))[:, None]
+    return jnp.concatenate([frac, other], axis=1).astype(jnp.float32)
+
+
+def learn(cfg: RunConfig, s: RunState) -> tuple[RunState, dict]:
+    """One learner update from replay, once the buffer holds a whole sequence.
+
+    A non-finite loss halts the run: the update is discarded and the run stays frozen at its
+    last good state from then on (checkpoints keep that state)."""
+    lc = cfg.learner
+    k_sample, k_update, k_next = jax.random.split(s.key, 3)
+
+    def update(s):
+        batch = replay_lib.sample(s.replay, k_sample, lc.batch, lc.seq_len)
+        learner, m = wm.learner_update(lc, s.learner, batch, k_update)
+        finite = jnp.all(jnp.stack([jnp.all(jnp.isfinite(v)) for v in jax.tree.leaves(m)]))
+        learner = jax.tree.map(lambda new, old: jnp.where(finite, new, old), learner, s.learner)
+        # The current view's latent in the updated VAE's space, so the next step's replay entry,
+        # memory input and curiosity all use one encoder.
+        z = jnp.where(finite, wm.encode(lc, learner.vae, s.frames)[0], s.z)
+        m = {k: jnp.where(finite, v, jnp.nan) for k, v in m.items()}
+        m["updated"] = finite.astype(jnp.int32)
+        m["non_finite"] = (~finite).astype(jnp.int32)
+        return s._replace(learner=learner, z=z), m
+
+    def skip(s):
+        return s, _no_update(cfg)
+
+    ready = replay_lib.can_sample(s.replay, lc.seq_len) & ~s.halted
+    s, m = lax.cond(ready, update, skip, s)
+    halt_now = m["non_finite"] > 0
+    s = s._replace(
+        key=k_next,
+        halted=s.halted | halt_now,
+        halted_step=jnp.where(halt_now & (s.halted_step < 0), s.step, s.halted_step),
+    )
+    return s, m
+
+
+def _no_update(cfg: RunConfig) -> dict:
+    nan = jnp.full((), jnp.nan, jnp.float32)
+    m = {k: nan for k in ("vae_loss", "recon", "kl", "nll", "self_loss", "curiosity")}
+    m["self_loss_agents"] = jnp.full((cfg.n_agents,), jnp.nan, jnp.float32)
+    m["updated"] = jnp.zeros((), jnp.int32)
+    m["non_finite"] = jnp.zeros((), jnp.int32)
+    return m
+
+
+def run_chunk(cfg: RunConfig, s: RunState, n_steps: int) -> tuple[RunState, dict]:
+    """`n_steps` agent steps (a multiple of metrics_every) of one run: `update_every` acting steps
+    then one learner update, scanned. Returns the state and the chunk's metrics in windows
+    (`reduce_windows`)."""
+    if n_steps % cfg.metrics_every:
+        raise ConfigError(f"a chunk of {n_steps} steps must be a multiple of metrics_every={cfg.metrics_every}")
+    def period(s, _):
+        s, step_m = lax.scan(lambda s, _: act(cfg, s), s, None, length=cfg.update_every)
+        running = ~s.halted  # steps of a halted run were not taken
+        s, learn_m = learn(cfg, s)
+        return s, (step_m, learn_m, running)
+
+    s, (step_m, learn_m, running) = lax.scan(period, s, None, length=n_steps // cfg.update_every)
+    step_m = jax.tree.map(lambda x: x.reshape((n_steps,) + x.shape[2:]), step_m)
+    return s, reduce_windows(cfg, step_m, learn_m, running)
+
+
+def reduce_windows(cfg: RunConfig, step_m: dict, learn_m: dict, running) -> dict:
+    """Per-step metrics [T, ...] and per-update metrics [T / update_every, ...] -> windows of
+    `metrics_every` steps. See metrics.SCHEMA for the meaning of every output."""
+    w = cfg.metrics_every
+    per = w // cfg.update_every
+
+    def win(x, k=w):
+        return x.reshape((x.shape[0] // k, k) + x.shape[1:])
+
+    ran = win(jnp.repeat(running, cfg.update_every), w)  # [W, w]: step was actually taken
+    n_ran = jnp.sum(ran, axis=1)  # [W]
+
+    def mean_steps(x):  # mean over the steps taken in each window, NaN if none
+        x = win(x).astype(jnp.float32)
+        r = ran.reshape(ran.shape + (1,) * (x.ndim - 2))
+        total = jnp.sum(jnp.where(r, x, 0.0), axis=1)
+        n = n_ran.reshape(n_ran.shape + (1,) * (x.ndim - 2))
+        return jnp.where(n > 0, total / jnp.maximum(n, 1), jnp.nan)
+
+    def count_steps(x):
+        x = win(x).astype(jnp.int32)
+        r = ran.reshape(ran.shape + (1,) * (x.ndim - 2))
+        return jnp.sum(jnp.where(r, x, 0), axis=1)
+
+    def last(x):
+        return win(x)[:, -1]
+
+    a = step_m["action"]
+    out = {
+        "curiosity": mean_steps(step_m["curiosity"]),
+        "curiosity_sample": jnp.where(ran[:, -1][:, None], last(step_m["curiosity"]), jnp.nan),
+        "predicted": mean_steps(step_m["predicted"]),
+        "action_counts": count_steps(jax.nn.one_hot(a, cfg.learner.n_actions, dtype=jnp.int32)),
+        "contact_object": count_steps(step_m["contact_object"]),
+        "contact_agent": count_steps(step_m["contact_agent"]),
+        "view_fraction": mean_steps(step_m["view_fraction"]),
+        "agent_pose": last(step_m["agent_pose"]),
+        "object_pos": last(step_m["object_pos"]),
+        "steps_taken": n_ran.astype(jnp.int32),
+    }
+    upd = learn_m["updated"]
+    u = win(upd, per)  # [W, per]
+    n_upd = jnp.sum(u, axis=1)
+    for name in ("vae_loss", "recon", "kl", "nll", "self_loss", "self_loss_agents"):
+        x = win(learn_m[name], per)
+        m = u.reshape(u.shape + (1,) * (x.ndim - 2)) > 0
+        total = jnp.sum(jnp.where(m, x, 0.0), axis=1)
+        n = n_upd.reshape(n_upd.shape + (1,) * (x.ndim - 2))
+        out[name] = jnp.where(n > 0, total / jnp.maximum(n, 1), jnp.nan)
+    out["updates"] = n_upd.astype(jnp.int32)
+    out["non_finite"] = jnp.sum(win(learn_m["non_finite"], per), axis=1).astype(jnp.int32)
+    return out
+
+
+# ------------------------------------------------------------------------------ many runs
+
+
+def map_runs(fn, xs: Any):
+    """`fn` applied to every run of xs (leading runs axis) one after another, in place: a
+    fori_loop whose carry is the whole stacked state, read and written one run at a time with
+    dynamic slices (so with a donated input, no second copy of the sweep state is needed)."""
+    n = jax.tree.leaves(xs)[0].shape[0]
+    x0 = jax.tree.map(lambda x: x[0], xs)
+    out_shape = jax.eval_shape(fn, x0)
+    ys = jax.tree.map(lambda sd: jnp.zeros((n,) + sd.shape, sd.dtype), out_shape)
+
+    def body(i, carry):
+        ys = carry
+        xi = jax.tree.map(lambda x: lax.dynamic_index_in_dim(x, i, keepdims=False), xs)
+        yi = fn(xi)
+        return jax.tree.map(lambda y, v: lax.dynamic_update_index_in_dim(y, v, i, 0), ys, yi)
+
+    return lax.fori_loop(0, n, body, ys)
+
+
+def map_runs_inplace(fn, xs: Any):
+    """Like `map_runs` for fn: state -> (state, out) where the new state replaces the old one in
+    the same stacked buffer."""
+    n = jax.tree.leaves(xs)[0].shape[0]
+    x0 = jax.tree.map(lambda x: x[0], xs)
+    _, out_shape = jax.eval_shape(fn, x0)
+    ys = jax.tree.map(lambda sd: jnp.zeros((n,) + sd.shape, sd.dtype), out_shape)
+
+    def body(i, carry):
+        xs, ys = carry
+        xi = jax.tree.map(lambda x: lax.dynamic_index_in_dim(x, i, keepdims=False), xs)
+        xo, yo = fn(xi)
+        put = lambda buf, v: lax.dynamic_update_index_in_dim(buf, v, i, 0)  # noqa: E731
+        return jax.tree.map(put, xs, xo), jax.tree.map(put, ys, yo)
+
+    return lax.fori_loop(0, n, body, (xs, ys))
+
+
+def init_runs(cfg: RunConfig, keys: jax.Array, policy: policies.PolicyParams) -> RunState:
+    """RunStates for keys [R, 2] and policy settings with a leading R axis."""
+    fn = lambda kp: init_run(cfg, *kp)  # noqa: E731
+    if cfg.runs_loop == "vmap":
+        return jax.vmap(fn)((keys, policy))
+    return map_runs(fn, (keys, policy))
+
+
+def sweep_chunk(cfg: RunConfig, states: RunState, n_steps: int) -> tuple[RunState, dict]:
+    """Advance every run of `states` (leading runs axis) by n_steps; metrics [R, windows, ...]."""
+    fn = functools.partial(run_chunk, cfg, n_steps=n_steps)
+    if cfg.runs_loop == "vmap":
+        return jax.vmap(fn)(states)
+    return map_runs_inplace(fn, states)
+
+
+def split_replay(states: RunState) -> tuple[RunState, replay_lib.Replay]:
+    """(state without its replay buffer, the buffer): the two are checkpointed separately."""
+    return states._replace(replay=None), states.replay
+
+
+def with_replay(states: RunState, replay: replay_lib.Replay) -> RunState:
+    return states._replace(replay=replay)
+
+
+def key_for_seed(seed: int) -> np.ndarray:
+    """A run's key: from its seed only, so a seed means the same run in every sweep."""
+    return np.asarray(jax.random.key_data(jax.random.key(int(seed), impl="threefry2x32")), np.uint32)
