@@ -19,8 +19,8 @@ os.environ.setdefault("MUJOCO_GL", "osmesa")
 # session (set before JAX initialises) makes each program compile once.
 CACHE = pathlib.Path(os.environ.setdefault("JAX_COMPILATION_CACHE_DIR", tempfile.mkdtemp(prefix="mjx_curio_xla_")))
 
-# The tiny sweep: image 16, 2 seeds x 3 policies, 200 steps, checkpoints at 100 and 200.
-TINY_SWEEP = ("seeds=2", "steps=200", "image=16", "buffer=500", "chunk=100", "checkpoint_every=100",
+# The tiny sweep: image 16, 2 seeds x (eps, boltzmann at T=0.5 and 1.5, ucb) = 8 runs, 200 steps, checkpoints at 100 and 200.
+TINY_SWEEP = ("seeds=2", "temperature=0.5,1.5", "steps=200", "image=16", "buffer=500", "chunk=100", "checkpoint_every=100",
               "keep_steps=100", "keep_every=0", "progress=false")
 
 
