@@ -2,12 +2,20 @@
 
 import os as _os
 
-# XLA's concurrency-optimised CPU scheduler deadlocks vmapped MJX steps over
-# many worlds (FACTS.md). The flag must be in place before JAX initialises its
-# backend, which happens lazily at the first computation, so importing this
-# package first is enough. Flags the user already set are kept.
-_FLAG = "--xla_cpu_enable_concurrency_optimized_scheduler=false"
-if "xla_cpu_enable_concurrency_optimized_scheduler" not in _os.environ.get("XLA_FLAGS", ""):
-    _os.environ["XLA_FLAGS"] = (_os.environ.get("XLA_FLAGS", "") + " " + _FLAG).strip()
+# XLA CPU flags, set before JAX initialises its backend (which happens lazily at the first
+# computation, so importing this package first is enough). A flag the user already set wins.
+_FLAGS = {
+    # The concurrency-optimised scheduler deadlocks vmapped MJX steps over many worlds
+    # (FACTS.md).
+    "xla_cpu_enable_concurrency_optimized_scheduler": "false",
+    # YNNPACK's dot kernels sum in an order that depends on how many threads the device has,
+    # so the same run gave different numbers on one device and on two (forced host devices
+    # split the cores). Without them a run is bit-identical on any number of devices.
+    "xla_cpu_experimental_ynn_fusion_type": "",
+}
+_given = _os.environ.get("XLA_FLAGS", "")
+_os.environ["XLA_FLAGS"] = " ".join(
+    [_given] + [f"--{k}={v}" for k, v in _FLAGS.items() if f"--{k}=" not in _given]
+).strip()
 
 __version__ = "0.1.0"

@@ -104,7 +104,7 @@ class LearnerConfig:
     # Decoder: one 4x4 stride-2 transposed conv per encoder layer (DCGAN / H&S style),
     # computed as a 2x2 conv + depth-to-space (see nets.py). Widths are the encoder's
     # reversed and halved: the decoder is not specified by the paper and half width
-    # keeps a VAE update above 2x PyTorch's speed on the CPU (learner_bench.py).
+    # keeps a VAE update above 2x PyTorch's speed on the CPU (bench.py).
     dec_channels: tuple = (128, 64, 32, 16)
     # Ha & Schmidhuber's VAE: reconstruction = per-image SUM of squared pixel errors
     # (pixels in [0, 1]), KL weight 1 (beta = 1) with "free bits": the KL term is
@@ -125,7 +125,7 @@ class LearnerConfig:
     #   stop-gradient) so the MDN-RNN always sees today's latent space. Costs an encoder
     #   forward over batch x (seq_len + 1) x n_agents frames per update (544 images at
     #   the defaults, 17x the VAE batch): measured 342 ms against 76 ms per update at
-    #   64 px on the 2-core CPU (learner_bench.py).
+    #   64 px on the 2-core CPU (bench.py).
     latents: str = "stored"
     n_actions: int = 7
 

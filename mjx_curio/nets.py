@@ -17,7 +17,7 @@
 All modules take unbatched or batched inputs as documented; parameters are plain pytrees,
 so everything vmaps over a leading runs axis of parameters.
 
-Speed notes (2-core CPU, jax 0.10.2, see learner_bench.py): every strided convolution is
+Speed notes (2-core CPU, jax 0.10.2, see bench.py): every strided convolution is
 rewritten as space-to-depth + a stride-1 2x2 convolution (`conv2x2`) whose backward pass
 is hand-written: the input gradient is another plain convolution and the kernel gradient
 four matmuls. XLA's own gradients of strided / transposed convolutions go through

@@ -66,7 +66,7 @@ class RunConfig:
 
     def __post_init__(self):
         arena_lib.validate(self.walls, self.n_agents, self.image)
-        check_float("jitter", self.jitter, 0.0, 1.0)
+        check_float("jitter", self.jitter, 0.0, arena_lib.MAX_JITTER)
         check_int("update_every", self.update_every, 1)
         check_int("metrics_every", self.metrics_every, 1)
         check_choice("runs_loop", self.runs_loop, RUNS_LOOPS)
@@ -295,40 +295,19 @@ def reduce_windows(cfg: RunConfig, step_m: dict, learn_m: dict, running) -> dict
 # ------------------------------------------------------------------------------ many runs
 
 
-def map_runs(fn, xs: Any):
-    """`fn` applied to every run of xs (leading runs axis) one after another, in place: a
-    fori_loop whose carry is the whole stacked state, read and written one run at a time with
-    dynamic slices (so with a donated input, no second copy of the sweep state is needed)."""
-    n = jax.tree.leaves(xs)[0].shape[0]
-    x0 = jax.tree.map(lambda x: x[0], xs)
-    out_shape = jax.eval_shape(fn, x0)
-    ys = jax.tree.map(lambda sd: jnp.zeros((n,) + sd.shape, sd.dtype), out_shape)
-
-    def body(i, carry):
-        ys = carry
-        xi = jax.tree.map(lambda x: lax.dynamic_index_in_dim(x, i, keepdims=False), xs)
-        yi = fn(xi)
-        return jax.tree.map(lambda y, v: lax.dynamic_update_index_in_dim(y, v, i, 0), ys, yi)
-
-    return lax.fori_loop(0, n, body, ys)
-
-
 def map_runs_inplace(fn, xs: Any):
-    """Like `map_runs` for fn: state -> (state, out) where the new state replaces the old one in
-    the same stacked buffer."""
+    """fn: state -> (state, out) applied to every run of xs (leading runs axis), one run after
+    another. A scan over run indices whose carry is the whole stacked state, read and written
+    one run at a time with dynamic slices, so with a donated input no second copy of the sweep
+    state exists; the per-run outputs are stacked by the scan. `fn` is traced once."""
     n = jax.tree.leaves(xs)[0].shape[0]
-    x0 = jax.tree.map(lambda x: x[0], xs)
-    _, out_shape = jax.eval_shape(fn, x0)
-    ys = jax.tree.map(lambda sd: jnp.zeros((n,) + sd.shape, sd.dtype), out_shape)
 
-    def body(i, carry):
-        xs, ys = carry
+    def body(xs, i):
         xi = jax.tree.map(lambda x: lax.dynamic_index_in_dim(x, i, keepdims=False), xs)
         xo, yo = fn(xi)
-        put = lambda buf, v: lax.dynamic_update_index_in_dim(buf, v, i, 0)  # noqa: E731
-        return jax.tree.map(put, xs, xo), jax.tree.map(put, ys, yo)
+        return jax.tree.map(lambda buf, v: lax.dynamic_update_index_in_dim(buf, v, i, 0), xs, xo), yo
 
-    return lax.fori_loop(0, n, body, (xs, ys))
+    return lax.scan(body, xs, jnp.arange(n))
 
 
 def init_runs(cfg: RunConfig, keys: jax.Array, policy: policies.PolicyParams) -> RunState:
@@ -336,7 +315,7 @@ def init_runs(cfg: RunConfig, keys: jax.Array, policy: policies.PolicyParams) ->
     fn = lambda kp: init_run(cfg, *kp)  # noqa: E731
     if cfg.runs_loop == "vmap":
         return jax.vmap(fn)((keys, policy))
-    return map_runs(fn, (keys, policy))
+    return lax.map(fn, (keys, policy))
 
 
 def sweep_chunk(cfg: RunConfig, states: RunState, n_steps: int) -> tuple[RunState, dict]:

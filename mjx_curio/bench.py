@@ -1,0 +1,377 @@
+"""Throughput figures on this machine: `python -m mjx_curio.bench what=env|learner|sweep key=value ...`
+
+    python -m mjx_curio.bench what=env runs=24 agents=2 image=64
+    python -m mjx_curio.bench what=learner
+    python -m mjx_curio.bench --help
+
+Each `what` is one function here taking the parsed keys and returning a dict of figures
+(`BENCHES`); `main` prints a readable summary of that dict and then the dict as one JSON line.
+
+what=env: `runs` worlds vmapped, each step = physics (`Arena.step`) + every agent's view
+(`Arena.render`), inside one jitted `lax.scan` over `steps` steps with random actions, as the
+training loop runs it. Reports the setup time (loading the scene, compiling reset and the
+renderer), the compile time of the stepping chunk, steady-state world-steps/s (best of `repeats`
+chunks), a breakdown into physics-only and render-only milliseconds per batched step, and the
+peak resident memory. The issue's target: >= 500 world-steps/s for 24 worlds x 2 agents at
+64 x 64 with rendering, compiling in <= 60 s.
+
+what=learner: the VAE update (forward + backward + Adam on `vae_batch` frames) in images/s,
+and one full `learner_update` (VAE + MDN-RNN + self-models) for one run. Reference (FACTS.md):
+the paper's PyTorch VAE update, batch 32 of 64 x 64, runs at about 234 images/s here.
+
+what=sweep: the sweep's own program on `runs` runs (2 agents, 64 x 64, batch 16, an update
+every 4 steps, replay 10,000 by default): aggregate run-steps/s (a run-step = every agent of one
+run acts once; agent-steps/s counts each agent), compile time and peak memory. The issue's
+target: >= 35 aggregate steps/s for 24 runs (ten times the paper's own code, 3.5 steps/s for one
+run, FACTS.md) with peak memory under 16 GiB.
+
+Every timing is the best of `repeats` blocks after one untimed warm-up call, each block ended
+by block_until_ready. Inputs are random: speed does not depend on the values.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import json
+import os
+import resource
+import sys
+import time
+
+import mjx_curio  # noqa: F401  (XLA flags before JAX initialises)
+import jax
+import jax.numpy as jnp
+import mujoco
+import optax
+
+from mjx_curio import arena as arena_lib
+from mjx_curio import world_model as wm
+from mjx_curio.cli import Key, as_choice, as_int, main_guard
+from mjx_curio.config import LATENT_MODES, ConfigError, LearnerConfig
+
+PROG = "mjx_curio.bench"
+SUMMARY = "Throughput figures: what=env (physics + rendering), learner (VAE / learner updates) or sweep (whole runs)."
+
+
+def _time(fn, args, iters: int, repeats: int):
+    """(seconds of the first call, best seconds per call over `repeats` blocks of `iters`)."""
+    t0 = time.perf_counter()
+    jax.block_until_ready(fn(*args))
+    first = time.perf_counter() - t0
+    best = float("inf")
+    for _ in range(repeats):
+        t0 = time.perf_counter()
+        for _ in range(iters):
+            out = fn(*args)
+        jax.block_until_ready(out)
+        best = min(best, (time.perf_counter() - t0) / iters)
+    return first, best
+
+
+def _peak_rss_mib() -> float:
+    return round(resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024, 1)  # KiB on Linux
+
+
+def _platform() -> dict:
+    return {
+        "backend": jax.default_backend(),
+        "devices": jax.device_count(),
+        "cpus": os.cpu_count(),
+        # Other processes competing for the cores slow every figure down; this says whether
+        # they were there (1-minute load average, taken at the end).
+        "load_avg": round(os.getloadavg()[0], 2),
+        "jax": jax.__version__,
+        "mujoco": mujoco.__version__,
+    }
+
+
+# ----------------------------------------------------------------------------------- env
+
+
+def bench_env(args: dict) -> dict:
+    """World-steps/s of `runs` vmapped worlds, physics plus every agent's rendered view."""
+    runs, steps, repeats = args["runs"], args["steps"], args["repeats"]
+    t_setup = time.perf_counter()
+    arena = arena_lib.make(args["walls"], args["agents"], args["image"])
+    n_actions = len(arena_lib.ACTIONS)
+
+    def step_all(states, key):
+        actions = jax.random.randint(key, (runs, arena.n_agents), 0, n_actions)
+        return jax.vmap(arena.step)(states, actions)
+
+    render_all = jax.vmap(arena.render)
+    render_jit = jax.jit(render_all)
+
+    # One program times both the full step and physics alone: `with_render` is a traced
+    # flag and lax.cond runs only the taken branch, so the breakdown costs no second MJX
+    # compile (each one is tens of seconds here). The frames are carried, as the training
+    # loop carries them to the learner, so the rendering cannot be optimised away.
+    @jax.jit
+    def chunk(states, frames, key, with_render):
+        def body(carry, k):
+            states, frames = carry
+            states = step_all(states, k)
+            frames = jax.lax.cond(with_render, render_all, lambda _: frames, states)
+            return (states, frames), None
+
+        (states, frames), _ = jax.lax.scan(body, (states, frames), jax.random.split(key, steps))
+        return states, frames
+
+    key = jax.random.key(args["seed"])
+    # States must come out of a compiled function: an eagerly built mjx.Data has other static
+    # metadata in its pytree and would not match the compiled chunk.
+    states = jax.jit(jax.vmap(arena.reset))(jax.random.split(key, runs))
+    frames = render_jit(states)
+    jax.block_until_ready(frames)
+    on, off = jnp.asarray(True), jnp.asarray(False)
+    setup_s = time.perf_counter() - t_setup
+
+    t0, c0 = time.perf_counter(), time.process_time()
+    compiled = chunk.lower(states, frames, key, on).compile()
+    # CPU seconds too: on a shared machine the wall time of a compile says more about the
+    # neighbours than about the program.
+    compile_s, compile_cpu_s = time.perf_counter() - t0, time.process_time() - c0
+
+    def timed(flag):
+        # Each chunk continues the same worlds from where the last one left them.
+        nonlocal states, frames, key
+        best = float("inf")
+        for i in range(repeats + 1):
+            key, sub = jax.random.split(key)
+            t0 = time.perf_counter()
+            states, frames = jax.block_until_ready(compiled(states, frames, sub, flag))
+            if i > 0:  # the first chunk warms up and is not counted
+                best = min(best, time.perf_counter() - t0)
+        return best / steps
+
+    full = timed(on)
+    physics = timed(off)
+    # Rendering alone, called on one batch of states (inside a scan XLA would hoist the
+    # rendering of an unchanging state out of the loop).
+    _, render = _time(render_jit, (states,), max(1, min(steps, 50)), repeats)
+    return {
+        "what": "env",
+        "runs": runs,
+        "agents": arena.n_agents,
+        "image": arena.image,
+        "walls": arena.walls,
+        "steps": steps,
+        "repeats": repeats,
+        "setup_s": round(setup_s, 2),
+        "compile_s": round(compile_s, 2),
+        "compile_cpu_s": round(compile_cpu_s, 2),
+        "world_steps_per_s": round(runs / full, 1),
+        "batched_step_ms": round(full * 1e3, 2),
+        "physics_ms": round(physics * 1e3, 2),
+        "render_ms": round(render * 1e3, 2),
+        "peak_rss_mib": _peak_rss_mib(),
+        **_platform(),
+    }
+
+
+# ------------------------------------------------------------------------------- learner
+
+
+def bench_vae(image: int = 64, batch: int = 32, iters: int = 10, repeats: int = 3, seed: int = 0) -> dict:
+    """VAE update throughput: forward + backward + Adam on `batch` frames of image x image."""
+    cfg = LearnerConfig(image=image, n_agents=1)
+    key = jax.random.PRNGKey(seed)
+    state = wm.init_learner(cfg, key)
+    opt = wm.optimizer(cfg)
+    frames = jax.random.randint(key, (batch, 1, image, image, 3), 0, 256).astype(jnp.uint8)
+
+    @jax.jit
+    def step(params, opt_state, k):
+        (loss, _), g = jax.value_and_grad(lambda p: wm.vae_loss(cfg, p, frames, k), has_aux=True)(params)
+        u, opt_state = opt.update(g, opt_state, params)
+        return optax.apply_updates(params, u), opt_state, loss
+
+    # Every timed call starts from the same parameters, which costs exactly what a
+    # training step costs.
+    first, best = _time(step, (state.vae, state.vae_opt, key), iters, repeats)
+    return {
+        "image": image,
+        "batch": batch,
+        "compile_s": round(first, 3),
+        "step_ms": round(best * 1e3, 2),
+        "images_per_s": round(batch / best, 1),
+    }
+
+
+def bench_learner_update(
+    image: int = 64,
+    n_agents: int = 2,
+    batch: int = 16,
+    seq_len: int = 16,
+    latents: str = "stored",
+    iters: int = 5,
+    repeats: int = 3,
+    seed: int = 0,
+) -> dict:
+    """Time of one full `learner_update` (VAE + MDN-RNN + self-models) for one run."""
+    cfg = LearnerConfig(image=image, n_agents=n_agents, batch=batch, seq_len=seq_len, latents=latents)
+    key = jax.random.PRNGKey(seed)
+    state = wm.init_learner(cfg, key)
+    ks = jax.random.split(key, 4)
+    shp = (batch, seq_len + 1, n_agents)
+    data = wm.Batch(
+        frames=jax.random.randint(ks[0], shp + (image, image, 3), 0, 256).astype(jnp.uint8),
+        latents=jax.random.normal(ks[1], shp + (cfg.latent,)),
+        actions=jax.random.randint(ks[2], shp, 0, cfg.n_actions),
+        carry=(jnp.zeros((batch, seq_len + 1, cfg.rnn_hidden)),) * 2,
+    )
+    update = jax.jit(wm.learner_update, static_argnums=0)
+    first, best = _time(lambda s, b, k: update(cfg, s, b, k), (state, data, ks[3]), iters, repeats)
+    return {
+        "image": image,
+        "n_agents": n_agents,
+        "batch": batch,
+        "seq_len": seq_len,
+        "latents": latents,
+        "compile_s": round(first, 3),
+        "update_ms": round(best * 1e3, 2),
+        "updates_per_s": round(1.0 / best, 2),
+        "config": dataclasses.asdict(cfg),
+    }
+
+
+def bench_learner(args: dict) -> dict:
+    """The VAE update alone and one full learner update."""
+    vae = bench_vae(args["image"], args["vae_batch"], args["iters"], args["repeats"], args["seed"])
+    update = bench_learner_update(
+        args["image"], args["agents"], args["batch"], args["seq_len"], args["latents"],
+        args["iters"], args["repeats"], args["seed"],
+    )
+    return {"what": "learner", "vae_update": vae, "learner_update": update, "peak_rss_mib": _peak_rss_mib(), **_platform()}
+
+
+def bench_sweep(args: dict) -> dict:
+    """The sweep's own compiled program (sweep.SweepProgram) on `runs` runs of the paper's
+    workload: each chunk of `steps` agent steps renders, encodes, remembers, predicts, acts and
+    steps physics every step and trains every `update_every` steps, exactly as
+    `python -m mjx_curio.sweep` runs. Aggregate speed = runs x steps / seconds per chunk."""
+    from mjx_curio import run as run_lib
+    from mjx_curio import sweep as sweep_lib
+
+    devices = jax.devices()
+    loop = args["runs_loop"] if args["runs_loop"] != "auto" else ("map" if devices[0].platform == "cpu" else "vmap")
+    learner = LearnerConfig(image=args["image"], n_agents=args["agents"], batch=args["batch"], seq_len=args["seq_len"],
+                            latents=args["latents"])
+    cfg = run_lib.RunConfig(n_agents=args["agents"], image=args["image"], buffer=args["buffer"],
+                            update_every=args["update_every"], metrics_every=args["update_every"], runs_loop=loop,
+                            learner=learner)
+    policies = ("eps", "boltzmann", "ucb")
+    runs = tuple(sweep_lib.RunSpec(policies[i % 3], args["seed"] + i // 3, 0.2, 1.5, 1.0) for i in range(args["runs"]))
+    n_pad = -len(runs) % len(devices)
+    program = sweep_lib.SweepProgram(cfg, runs, n_pad, args["steps"])
+    t0 = time.perf_counter()
+    states = program.init()
+    jax.block_until_ready(states)
+    init_s = time.perf_counter() - t0
+    t0 = time.perf_counter()
+    states, _ = program.chunk(states)
+    jax.block_until_ready(states)
+    first = time.perf_counter() - t0
+    best = float("inf")
+    for _ in range(args["repeats"]):
+        t0 = time.perf_counter()
+        states, _ = program.chunk(states)
+        jax.block_until_ready(states)
+        best = min(best, time.perf_counter() - t0)
+    run_steps = len(runs) * args["steps"] / best
+    return {
+        "what": "sweep",
+        "runs": len(runs),
+        "agents": args["agents"],
+        "image": args["image"],
+        "batch": args["batch"],
+        "update_every": args["update_every"],
+        "buffer": args["buffer"],
+        "runs_loop": loop,
+        "steps_per_chunk": args["steps"],
+        "init_s": round(init_s, 1),
+        "compile_s": round(first - best, 1),  # first chunk minus a steady one
+        "chunk_s": round(best, 2),
+        "run_steps_per_s": round(run_steps, 1),  # one step of one run: every agent acts once
+        "agent_steps_per_s": round(run_steps * args["agents"], 1),
+        "ms_per_run_step": round(1e3 / run_steps * 1, 2),
+        "peak_rss_mib": _peak_rss_mib(),
+        **_platform(),
+    }
+
+
+# ---------------------------------------------------------------------------------- main
+
+BENCHES = {"env": bench_env, "learner": bench_learner, "sweep": bench_sweep}
+
+KEYS = [
+    Key("what", "env", "what to time: " + " | ".join(BENCHES), as_choice(tuple(BENCHES))),
+    Key("runs", 24, "env: worlds stepped together (vmapped); sweep: runs", as_int(1)),
+    Key("agents", 2, "agents per world: 1 | 2", as_int(1, 2)),
+    Key("image", 64, "side of each agent's view in pixels (learner: a power of two in [8, 256])", as_int(1)),
+    Key("walls", "same", "env: wall variant: " + " | ".join(arena_lib.WALLS), as_choice(arena_lib.WALLS)),
+    Key("steps", 200, "env, sweep: steps per timed chunk", as_int(1)),
+    Key("repeats", 3, "timed blocks; the best is reported", as_int(1)),
+    Key("iters", 5, "learner: calls per timed block", as_int(1)),
+    Key("vae_batch", 32, "learner: frames per VAE update", as_int(1)),
+    Key("batch", 16, "learner: sequences per learner update", as_int(1)),
+    Key("seq_len", 16, "learner: transitions per sequence", as_int(2)),
+    Key("latents", "stored", "learner: " + " | ".join(LATENT_MODES), as_choice(LATENT_MODES)),
+    Key("update_every", 4, "sweep: agent steps between learner updates", as_int(1)),
+    Key("buffer", 10_000, "sweep: replay capacity per run", as_int(3)),
+    Key("runs_loop", "auto", "sweep: map | vmap | auto (map on CPU)", as_choice(("auto", "map", "vmap"))),
+    Key("seed", 0, "random seed", as_int(0)),
+]
+
+
+def _validate(args: dict) -> None:
+    """Checks that need more than one key, done before any work starts."""
+    if args["what"] == "env":
+        arena_lib.validate(args["walls"], args["agents"], args["image"])
+    elif args["what"] == "sweep":
+        arena_lib.validate("same", args["agents"], args["image"])
+        LearnerConfig(image=args["image"], n_agents=args["agents"], batch=args["batch"], seq_len=args["seq_len"], latents=args["latents"])
+        if args["steps"] % args["update_every"]:
+            raise ConfigError(f"steps={args['steps']} must be a multiple of update_every={args['update_every']}")
+        if args["buffer"] < args["seq_len"] + 2:
+            raise ConfigError(f"buffer={args['buffer']} must be at least seq_len + 2 = {args['seq_len'] + 2}")
+    elif args["what"] == "learner":
+        LearnerConfig(image=args["image"], n_agents=args["agents"], batch=args["batch"], seq_len=args["seq_len"], latents=args["latents"])
+        LearnerConfig(image=args["image"], n_agents=1, batch=args["vae_batch"])
+
+
+def summary(result: dict, indent: str = "") -> str:
+    """The result dict as aligned `name: value` lines, nested dicts as indented sections."""
+    lines = []
+    for name, value in result.items():
+        if isinstance(value, dict) and name != "config":
+            lines.append(f"{indent}{name}:")
+            lines.append(summary(value, indent + "  "))
+        elif name != "config":
+            lines.append(f"{indent}{name:<20} {value}")
+    return "\n".join(lines)
+
+
+def main(argv=None) -> dict | None:
+    args = main_guard(argv, PROG, SUMMARY, KEYS)
+    if args is None:
+        return None
+    try:
+        _validate(args)
+    except ConfigError as err:
+        print(f"error: {err}", file=sys.stderr)
+        raise SystemExit(2) from None
+    result = BENCHES[args["what"]](args)
+    print(summary(result))
+    if result["what"] == "env" and (args["runs"], args["agents"], args["image"]) == (24, 2, 64):
+        ok = result["world_steps_per_s"] >= 500 and result["compile_s"] <= 60
+        print(f"target: >= 500 world-steps/s and compile <= 60 s: {'met' if ok else 'NOT met'}")
+    if result["what"] == "sweep" and (args["runs"], args["agents"], args["image"], args["batch"], args["update_every"]) == (24, 2, 64, 16, 4):
+        ok = result["run_steps_per_s"] >= 35 and result["peak_rss_mib"] < 16 * 1024
+        print(f"target: >= 35 aggregate steps/s with peak memory < 16 GiB: {'met' if ok else 'NOT met'}")
+    print(json.dumps(result), flush=True)
+    return result
+
+
+if __name__ == "__main__":
+    main()
