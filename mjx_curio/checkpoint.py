@@ -160,8 +160,8 @@ def from_nested(nested: dict, like):
     flat, treedef = jax.tree_util.tree_flatten_with_path(like)
     leaves = []
     for path, a in flat:
-        if _size(a) == 0:
-            leaves.append(jax.numpy.zeros(a.shape, a.dtype))
+        if _size(a) == 0:  # placed like its twin, or shard_map refuses the restored state
+            leaves.append(jax.numpy.zeros(a.shape, a.dtype, device=getattr(a, "sharding", None)))
             continue
         node = nested
         for k in path:

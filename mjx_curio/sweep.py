@@ -20,6 +20,7 @@ from __future__ import annotations
 
 import dataclasses
 import datetime
+import functools
 import itertools
 import math
 import os
@@ -42,6 +43,7 @@ FORMAT = "mjx_curio.sweep/1"
 POLICY_SETTING = {"eps": "eps", "boltzmann": "temperature", "ucb": "ucb_c"}
 
 KEYS = (
+    Key("preset", "none", "a paper experiment from experiments/presets.toml (its keys are defaults here), or none", as_str),
     Key("policies", ("eps", "boltzmann", "ucb"), "exploration policies: eps, boltzmann, ucb", as_choice(tuple(POLICY_IDS)), many=True),
     Key("seeds", 8, "seeds per setting (seeds first_seed .. first_seed + seeds - 1)", as_int(1)),
     Key("first_seed", 0, "first seed", as_int(0)),
@@ -58,7 +60,7 @@ KEYS = (
     Key("ucb_c", (1.0,), "UCB exploration constant c > 0 (a list sweeps it)", as_float(0.0, lo_open=True), many=True),
     Key("lr", 1e-3, "Adam learning rate of all three models", as_float(0.0, lo_open=True)),
     Key("latents", "stored", "MDN-RNN training latents: stored (as acted) or reencode (current VAE)", as_choice(("stored", "reencode"))),
-    Key("jitter", 0.0, "objects start up to this many metres from the paper's layout, seeded, in [0, 1]", as_float(0.0, 1.0)),
+    Key("jitter", 0.0, "objects start up to this many metres from the paper's layout, seeded, in [0, 0.4]", as_float(0.0, 0.4)),
     Key("metrics_every", 20, "agent steps per metrics window (the paper samples every 20)", as_int(1)),
     Key("chunk", 100, "agent steps per compiled chunk between host syncs", as_int(1)),
     Key("out", "", "sweep directory (default: a new runs/<date-time>)", as_str),
@@ -77,7 +79,7 @@ KEYS = (
 )
 
 # Keys that may differ when resuming: they change bookkeeping, not the runs' results.
-RESUME_FREE = {"out", "resume", "steps", "progress", "compile_cache", "distributed", "chunk", "checkpoint_every",
+RESUME_FREE = {"preset", "out", "resume", "steps", "progress", "compile_cache", "distributed", "chunk", "checkpoint_every",
                "keep_last", "keep_every", "keep_steps", "save_replay"}
 
 
@@ -155,10 +157,12 @@ def plan(values: dict, now: datetime.datetime | None = None) -> Plan:
     if v["resume"]:
         if not manifest.is_file():
             raise ConfigError(f"resume=true but out={out} holds no sweep (no manifest.json)")
-        saved = read_manifest(out)["config"]
-        diff = [k for k in saved if k not in RESUME_FREE and _norm(saved[k]) != _norm(config_of(v).get(k))]
+        defaults = config_of({k.name: k.default for k in KEYS})
+        saved = {**defaults, **read_manifest(out)["config"]}  # a key newer than the sweep: its default
+        given = config_of(v)
+        diff = [k for k in saved if k not in RESUME_FREE and _norm(saved[k]) != _norm(given.get(k, defaults.get(k)))]
         if diff:
-            detail = "; ".join(f"{k}: saved {saved[k]!r}, given {config_of(v).get(k)!r}" for k in diff)
+            detail = "; ".join(f"{k}: saved {saved[k]!r}, given {given.get(k)!r}" for k in diff)
             raise ConfigError(f"resume=true: out={out} was made with another config ({detail}); "
                               "resume with the same values, or start a new sweep in another out")
         done = read_progress(out).get("steps_done", 0)
@@ -196,9 +200,45 @@ def read_progress(out: pathlib.Path) -> dict:
 # ---------------------------------------------------------------------------------- execution
 
 
+PRESETS = pathlib.Path(__file__).resolve().parents[1] / "experiments" / "presets.toml"
+
+
+def load_presets(path: pathlib.Path = PRESETS) -> dict:
+    import tomllib
+
+    if not path.is_file():
+        raise ConfigError(f"preset needs {path} (part of the repository checkout)")
+    return tomllib.loads(path.read_text())
+
+
+def apply_preset(argv: list) -> list:
+    """argv with the preset's keys put in front of it (the command line's own keys win)."""
+    given = {a.partition("=")[0]: a.partition("=")[2] for a in argv if "=" in a}
+    name = given.get("preset", "none")
+    if name == "none":
+        return argv
+    presets = load_presets()
+    if name not in presets:
+        raise ConfigError(f"preset={name!r} is not allowed; choose one of: none, {', '.join(presets)}")
+    items = [f"{k}={v}" for k, v in presets[name].items() if k != "about" and k not in given]
+    if "out" not in given:
+        items.append(f"out=runs/paper/{name}")
+    return items + list(argv)
+
+
 def main(argv=None) -> int:
+    argv = list(sys.argv[1:] if argv is None else argv)
+    try:
+        argv = apply_preset(argv)
+    except ConfigError as err:
+        print(f"error: {err}", file=sys.stderr)
+        return 2
     values = cli.main_guard(argv, PROG, SUMMARY, KEYS)
     if values is None:
+        if any(a in ("-h", "--help", "help") for a in argv) and PRESETS.is_file():
+            print("\npresets (python -m mjx_curio.sweep preset=<name>):")
+            for name, preset in load_presets().items():
+                print(f"  {name:<30} {preset.get('about', '')}")
         return 0
     try:
         p = plan(values)
@@ -280,6 +320,7 @@ def execute(p: Plan) -> int:
     step = start
     checkpoint_steps = set(v["keep_steps"])
     while step < v["steps"]:
+        states = _inject_fault(states, step)
         states, m = program.chunk(states)
         m = {k: _host(x)[:n_runs] for k, x in m.items()}
         w0 = step // v["metrics_every"]
@@ -322,32 +363,17 @@ class SweepProgram:
 
     def __init__(self, cfg, runs: tuple, n_pad: int, chunk: int):
         import jax
-        from jax.sharding import NamedSharding
-        from jax.sharding import PartitionSpec as P
 
         from mjx_curio import policies
         from mjx_curio import run as run_lib
 
         self.cfg, self.chunk_steps = cfg, chunk
-        devices = jax.devices()
-        self.mesh = jax.make_mesh((len(devices),), ("runs",), devices=devices)
-        self.sharding = NamedSharding(self.mesh, P("runs"))
+        self._init, self._chunk, self.sharding = _compiled(cfg, chunk, tuple(jax.devices()))
         padded = list(runs) + [runs[0]] * n_pad
         keys = np.stack([run_lib.key_for_seed(r.seed) for r in padded])
         pol = [policies.make_policy_params(POLICY_IDS[r.policy], r.eps, r.temperature, r.ucb_c) for r in padded]
         pol = jax.tree.map(lambda *x: np.stack([np.asarray(a) for a in x]), *pol)
         self.inputs = jax.tree.map(self._global, (keys, pol))
-
-        spec = P("runs")
-        # Each device advances its own runs and nothing crosses devices, so shard_map's check of
-        # which values vary across the mesh has nothing to guard (and it rejects the runs loop's
-        # zero-initialised carry).
-        init = jax.shard_map(lambda k, q: run_lib.init_runs(cfg, k, q), mesh=self.mesh,
-                             in_specs=(spec, spec), out_specs=spec, check_vma=False)
-        chunk_fn = jax.shard_map(lambda s: run_lib.sweep_chunk(cfg, s, chunk), mesh=self.mesh,
-                                 in_specs=(spec,), out_specs=(spec, spec), check_vma=False)
-        self._init = jax.jit(init)
-        self._chunk = jax.jit(chunk_fn, donate_argnums=0)
 
     def _global(self, x: np.ndarray):
         import jax
@@ -365,6 +391,47 @@ class SweepProgram:
 
     def chunk(self, states):
         return self._chunk(states)
+
+
+@functools.lru_cache(maxsize=8)
+def _compiled(cfg, chunk: int, devices: tuple):
+    """(init, chunk, sharding) for a config, one set per process: a second sweep with the same
+    program in the same process (a resume, a test) reuses the traces and executables."""
+    import jax
+    from jax.sharding import NamedSharding
+    from jax.sharding import PartitionSpec as P
+
+    from mjx_curio import run as run_lib
+
+    mesh = jax.make_mesh((len(devices),), ("runs",), devices=devices)
+    spec = P("runs")
+    # Each device advances its own runs and nothing crosses devices, so shard_map's check of
+    # which values vary across the mesh has nothing to guard (and it rejects the runs loop's
+    # zero-initialised carry).
+    init = jax.shard_map(lambda k, q: run_lib.init_runs(cfg, k, q), mesh=mesh,
+                         in_specs=(spec, spec), out_specs=spec, check_vma=False)
+    chunk_fn = jax.shard_map(lambda s: run_lib.sweep_chunk(cfg, s, chunk), mesh=mesh,
+                             in_specs=(spec,), out_specs=(spec, spec), check_vma=False)
+    return jax.jit(init), jax.jit(chunk_fn, donate_argnums=0), NamedSharding(mesh, spec)
+
+
+# Fault injection for tests/test_sweep.py: "nan-latents:<run>:<step>" fills run <run>'s stored
+# replay latents with NaN when the sweep reaches <step>, so its next MDN-RNN loss is NaN.
+FAULT_ENV = "MJX_CURIO_FAULT"
+
+
+def _inject_fault(states, step: int):
+    spec = os.environ.get(FAULT_ENV, "")
+    if not spec:
+        return states
+    kind, run, at = spec.split(":")
+    if kind != "nan-latents" or int(at) != step:
+        return states
+    import jax.numpy as jnp
+
+    latents = states.replay.latents
+    poisoned = jnp.where((jnp.arange(latents.shape[0]) == int(run))[:, None, None, None], jnp.nan, latents)
+    return states._replace(replay=states.replay._replace(latents=poisoned))
 
 
 def _host(x) -> np.ndarray:

@@ -1,6 +1,8 @@
 """Shared pytest setup: GL for MuJoCo's renderer, one XLA compilation cache for the whole
 session (in-process and subprocess alike), and one tiny sweep that several test files read."""
 
+import contextlib
+import io
 import os
 import pathlib
 import subprocess
@@ -25,7 +27,8 @@ TINY_SWEEP = ("seeds=2", "temperature=0.5,1.5", "steps=200", "image=16", "buffer
 
 
 def run_sweep(*args: str, env: dict | None = None, check: bool = True, timeout: float = 900) -> subprocess.CompletedProcess:
-    """`python -m mjx_curio.sweep *args` in a subprocess sharing the session's compile cache."""
+    """`python -m mjx_curio.sweep *args` in a subprocess sharing the session's compile cache.
+    For what needs its own process: a kill, a crash, another device count."""
     full_env = dict(os.environ, **(env or {}))
     proc = subprocess.run([sys.executable, "-m", "mjx_curio.sweep", *args, f"compile_cache={CACHE}"],
                           capture_output=True, text=True, env=full_env, timeout=timeout)
@@ -34,9 +37,74 @@ def run_sweep(*args: str, env: dict | None = None, check: bool = True, timeout: 
     return proc
 
 
+def sweep_in_process(*args: str, env: dict | None = None, check: bool = True) -> tuple[int, str]:
+    """The same sweep run inside the test process: (exit status, stderr). Sweeps with one
+    program share its trace and executable here (tracing alone costs ~20 s a process)."""
+    from mjx_curio import sweep
+
+    saved = {k: os.environ.get(k) for k in (env or {})}
+    os.environ.update(env or {})
+    err = io.StringIO()
+    try:
+        with contextlib.redirect_stderr(err):
+            try:
+                rc = sweep.main([*args, f"compile_cache={CACHE}"])
+            except SystemExit as exit_:
+                rc = exit_.code
+    finally:
+        for k, v in saved.items():
+            if v is None:
+                os.environ.pop(k, None)
+            else:
+                os.environ[k] = v
+    if check and rc != 0:
+        raise AssertionError(f"sweep {' '.join(args)} failed ({rc}):\n{err.getvalue()[-4000:]}")
+    return rc, err.getvalue()
+
+
 @pytest.fixture(scope="session")
 def tiny_sweep(tmp_path_factory) -> pathlib.Path:
     """A finished tiny sweep directory (made once per test session)."""
     out = tmp_path_factory.mktemp("sweeps") / "tiny"
-    run_sweep(*TINY_SWEEP, f"out={out}")
+    sweep_in_process(*TINY_SWEEP, f"out={out}")
     return out
+
+
+# ------------------------------------------------------------------------------------------------
+# Analysis, notebook and video tests (test_analysis.py, test_notebook.py, test_video.py): a tiny
+# single-agent sweep too, made in a background process while `tiny_sweep` is made in this one
+# (two cores, two compiles), and a directory holding both, as the notebook reads them.
+
+TINY_SINGLE_SWEEP = ("agents=1", "policies=eps,ucb", "seeds=1", "steps=200", "image=16", "buffer=500", "chunk=100",
+                     "checkpoint_every=100", "keep_steps=100", "keep_every=0", "progress=false")
+
+
+@pytest.fixture(scope="session")
+def tiny_single_started(tmp_path_factory):
+    """Starts the tiny single-agent sweep in a background process; (out, process)."""
+    out = tmp_path_factory.mktemp("sweeps_single") / "tiny_single"
+    proc = subprocess.Popen([sys.executable, "-m", "mjx_curio.sweep", *TINY_SINGLE_SWEEP, f"out={out}",
+                             f"compile_cache={CACHE}"], stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True)
+    yield out, proc
+    if proc.poll() is None:
+        proc.kill()
+        proc.wait()
+
+
+@pytest.fixture(scope="session")
+def tiny_single_sweep(tiny_single_started) -> pathlib.Path:
+    """A finished tiny single-agent sweep: eps and ucb, one seed each, 200 steps, image 16."""
+    out, proc = tiny_single_started
+    _, err = proc.communicate(timeout=900)
+    if proc.returncode != 0:
+        raise AssertionError(f"single-agent sweep failed ({proc.returncode}):\n{err[-4000:]}")
+    return out
+
+
+@pytest.fixture(scope="session")
+def tiny_sweeps_dir(tmp_path_factory, tiny_single_started, tiny_sweep, tiny_single_sweep) -> pathlib.Path:
+    """A directory holding the two tiny sweeps (symlinks `multi` and `single`), as runs/paper holds the presets."""
+    parent = tmp_path_factory.mktemp("sweeps_parent")
+    (parent / "multi").symlink_to(tiny_sweep, target_is_directory=True)
+    (parent / "single").symlink_to(tiny_single_sweep, target_is_directory=True)
+    return parent
