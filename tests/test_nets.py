@@ -131,6 +131,71 @@ def test_vae_reconstruction_loss_falls_on_structured_frames():
     assert after < 0.6 * mean_baseline, (after, mean_baseline)
 
 
+def _arena_frames(n_states: int, seed: int):
+    """Real views of the arena: both agents of `arena_different_2` at random poses, the objects
+    scattered (the cylinder sometimes lying down), rendered at 16 px by the project's renderer.
+    Returns uint8 [2 * n_states, 16, 16, 3]."""
+    import mujoco
+    from mujoco import mjx
+
+    from mjx_curio import arena as arena_lib
+
+    arena = arena_lib.make("different", n_agents=2, image=16)
+    m = arena.mj_model
+    rng = np.random.default_rng(seed)
+    datas = []
+    for _ in range(n_states):
+        d = mujoco.MjData(m)
+        d.qpos[:] = arena.qpos0
+        for i in range(2):
+            origin = m.body_pos[arena.agent_bodies[i], :2]
+            d.qpos[arena.qpos_xy[i]] = rng.uniform(-3.2, 3.2, 2) - origin
+            d.qpos[arena.qpos_yaw[i]] = rng.uniform(-np.pi, np.pi)
+        for k, adr in enumerate(arena.object_qpos):
+            d.qpos[adr : adr + 2] = rng.uniform(-3.0, 3.0, 2)
+            if k == 1 and rng.random() < 0.5:  # the cylinder, toppled
+                d.qpos[adr + 2] = 0.2
+                d.qpos[adr + 3 : adr + 7] = [np.cos(np.pi / 4), np.sin(np.pi / 4), 0.0, 0.0]
+        mujoco.mj_kinematics(m, d)
+        datas.append(mjx.put_data(m, d))
+    batch = jax.tree.map(lambda *xs: np.stack([np.asarray(x) for x in xs]), *datas)
+    rgb, _ = jax.jit(jax.vmap(arena.renderer))(batch)
+    return np.asarray(rgb).reshape((-1, 16, 16, 3))
+
+
+def test_vae_reconstruction_loss_falls_on_frames_of_the_arena():
+    cfg = LearnerConfig(image=16, n_agents=1)
+    train = jnp.asarray(_arena_frames(256, seed=0))[:, None]  # 512 views
+    held = jnp.asarray(_arena_frames(32, seed=1))  # 64 views never trained on
+    st = wm.init_learner(cfg, jax.random.PRNGKey(0))
+    opt = wm.optimizer(cfg)
+
+    @jax.jit
+    def step(p, s, idx, i):
+        key = jax.random.fold_in(jax.random.PRNGKey(2), i)
+        _, g = jax.value_and_grad(lambda p: wm.vae_loss(cfg, p, train[idx], key)[0])(p)
+        u, s = opt.update(g, s, p)
+        return optax.apply_updates(p, u), s
+
+    @jax.jit
+    def recon(p):
+        mu, _ = wm.encode(cfg, p, held)
+        return jnp.mean(jnp.sum((wm.decode(cfg, p, mu) - held / 255.0) ** 2, axis=(1, 2, 3)))
+
+    rng = np.random.default_rng(3)
+    p, s = st.vae, st.vae_opt
+    before = float(recon(p))
+    for i in range(600):
+        p, s = step(p, s, rng.integers(0, train.shape[0], 32), i)
+    after = float(recon(p))
+    mean_img = jnp.mean(train[:, 0] / 255.0, axis=0)
+    mean_baseline = float(jnp.mean(jnp.sum((mean_img - held / 255.0) ** 2, axis=(1, 2, 3))))
+    print(f"arena frames: recon before {before:.2f} after {after:.2f} mean-image baseline {mean_baseline:.2f}")
+    # measured: 54.5 -> 14.1, against 25.1 for the best reconstruction that ignores the frame
+    assert after < 0.35 * before, (before, after)
+    assert after < 0.7 * mean_baseline, (after, mean_baseline)
+
+
 def test_self_models_have_separate_parameters_per_agent():
     cfg = LearnerConfig(image=8, n_agents=2, latent=4, rnn_hidden=8, self_hidden=16)
     st = wm.init_learner(cfg, jax.random.PRNGKey(0))
