@@ -125,9 +125,16 @@ class Checkpoints:
         return run_lib.with_replay(state, replay)
 
     def restore_raw(self, step: int) -> dict:
-        """Checkpoint `step`'s state as nested dicts of NumPy arrays, no target structure needed
-        (what analysis.py uses to decode with saved parameters)."""
-        return self.state.restore(step, args=ocp.args.StandardRestore())
+        """Checkpoint `step`'s state as nested dicts of arrays on this process's first device, no
+        target structure needed (what analysis.py uses to decode with saved parameters). Reads a
+        sweep saved on any number of devices, e.g. on a GPU host, on a one-CPU laptop."""
+        path = self.directory / "state" / str(step) / "default"
+        local = jax.sharding.SingleDeviceSharding(jax.devices()[0])
+        with ocp.StandardCheckpointer() as reader:
+            meta = reader.metadata(path)
+            tree = getattr(meta, "item_metadata", meta)
+            target = jax.tree.map(lambda m: jax.ShapeDtypeStruct(m.shape, m.dtype, sharding=local), tree)
+            return reader.restore(path, target)
 
     def close(self) -> None:
         self.state.close()

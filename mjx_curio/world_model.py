@@ -73,7 +73,42 @@ def make_nets(cfg: LearnerConfig) -> Nets:
 
 @functools.lru_cache(maxsize=None)
 def optimizer(cfg: LearnerConfig) -> optax.GradientTransformation:
-    return optax.adam(cfg.lr)  # FACTS.md: Adam 1e-3 for all three models
+    return adam(cfg.lr)  # FACTS.md: Adam 1e-3 for all three models
+
+
+class AdamState(NamedTuple):
+    count: jax.Array  # int32: updates done
+    mu: Any  # first moments, like the params
+    nu: Any  # second moments
+
+
+def adam(lr: float, b1: float = 0.9, b2: float = 0.999, eps: float = 1e-8) -> optax.GradientTransformation:
+    """Adam (Kingma & Ba), the same maths as `optax.adam`, written in their "efficient" form:
+    the bias corrections fold into one scalar step size and a scaled epsilon,
+        p <- p - lr * sqrt(1 - b2^t) / (1 - b1^t) * m / (sqrt(v) + eps * sqrt(1 - b2^t)),
+    which equals lr * m_hat / (sqrt(v_hat) + eps) exactly in real arithmetic. Why not optax's:
+    its per-element divisions by the bias corrections are what XLA's algebraic simplifier
+    reassociates, differently in differently fused programs, so the same run rounded differently
+    on one device and sharded over two. Here no array is divided by a scalar, and nothing is
+    left to reassociate."""
+
+    def init(params):
+        zeros = lambda: jax.tree.map(jnp.zeros_like, params)  # noqa: E731
+        return AdamState(jnp.zeros((), jnp.int32), zeros(), zeros())
+
+    def update(grads, state, params=None):
+        del params
+        count = state.count + 1
+        mu = jax.tree.map(lambda m, g: b1 * m + (1.0 - b1) * g, state.mu, grads)
+        nu = jax.tree.map(lambda v, g: b2 * v + (1.0 - b2) * jnp.square(g), state.nu, grads)
+        t = count.astype(jnp.float32)
+        root_c2 = jnp.sqrt(1.0 - jnp.power(jnp.float32(b2), t))
+        step = -lr * root_c2 / (1.0 - jnp.power(jnp.float32(b1), t))
+        eps_hat = eps * root_c2
+        updates = jax.tree.map(lambda m, v: step * (m / (jnp.sqrt(v) + eps_hat)), mu, nu)
+        return updates, AdamState(count, mu, nu)
+
+    return optax.GradientTransformation(init, update)
 
 
 # ----------------------------------------------------------------------------------------

