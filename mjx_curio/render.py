@@ -172,18 +172,7 @@ class Renderer:
             raise ValueError(f"textures too large for the renderer: {len(self._table)} texels (max 2**23)")
         self._gids = np.asarray([p.geom_id for p in self._prims], np.int32)
         # own[v, p]: primitive p belongs to agent v's own body, so v must not see it.
-        self._own = np.asarray([[p.body == b for p in self._prims] for b in self.agent_body_ids])
-
-        # Pixel-centre rays in camera coordinates (x right, y up, looking along -z), row 0 on
-        # top. Aspect 1, so the horizontal half-extent equals the vertical one.
-        n = self.image
-        half = math.tan(math.radians(self.fovy) / 2.0)
-        centres = (np.arange(n) + 0.5) / n * 2.0 - 1.0
-        # Ray r = row * n + column.
-        self._ray_x = np.tile(half * centres, n).astype(np.float32)  # [R]
-        self._ray_y = np.repeat(-half * centres, n).astype(np.float32)  # [R], top row first
-        # 1/|d|^2 of (x, y, -1): rotations keep |d|, so it is the same in every local frame.
-        self._ray_inv_dd = (1.0 / (self._ray_x.astype(np.float64) ** 2 + self._ray_y**2 + 1.0)).astype(np.float32)
+        self._own = self.hide_bodies([[b] for b in self.agent_body_ids])
 
     @property
     def n_agents(self) -> int:
@@ -191,8 +180,27 @@ class Renderer:
 
     def __call__(self, data):
         """Render every agent's view of one world: (rgb uint8 [V,H,W,3], geom_id int32 [V,H,W])."""
-        f32 = jnp.float32
         eye, cam = camera_poses(data, self.agent_body_ids)  # [V,3], [V,3,3]
+        # The agent's own body is never seen from its own eye (which sits on its top face).
+        return self.view(data, eye, cam, hidden=self._own)
+
+    def view(self, data, eye, cam, hidden=None, image: int | None = None, fovy: float | None = None):
+        """Render one world from any cameras with this scene's geoms, textures and lights.
+
+        Args:
+          data: `mjx.Data` (anything with `geom_xpos`, `geom_xmat`).
+          eye: camera positions `[V, 3]`, world frame.
+          cam: camera frames `[V, 3, 3]`, MuJoCo's convention (columns: right, up, back; the
+            camera looks along -z).
+          hidden: optional bool numpy `[V, n_prims]`: primitives left out of each view.
+          image, fovy: image side and vertical field of view (default: the renderer's).
+        Returns (rgb uint8 [V,H,W,3], geom_id int32 [V,H,W]); row 0 is the top of the image.
+        """
+        f32 = jnp.float32
+        n = self.image if image is None else int(image)
+        X, Y, inv_dd = _pixel_rays(n, self.fovy if fovy is None else float(fovy))
+        eye = jnp.asarray(eye, f32).reshape(-1, 3)
+        cam = jnp.asarray(cam, f32).reshape(-1, 3, 3)
         gpos = jnp.asarray(data.geom_xpos, f32)[self._gids]  # [P,3]
         gmat = jnp.asarray(data.geom_xmat, f32).reshape(-1, 3, 3)[self._gids]  # [P,3,3] local -> world
         # Per view and primitive: the eye in the primitive's frame, o = R^T (eye - c), and the
@@ -203,11 +211,10 @@ class Renderer:
         # Direction towards the sun in each primitive's frame, for n . l. The headlight shines
         # along the view axis: towards it is the camera's back axis, axes[2].
         sun = _rt_times(gmat, jnp.broadcast_to(jnp.asarray(self._sun[0]), gpos.shape))  # [P,3]
-
-        X = jnp.asarray(self._ray_x)
-        Y = jnp.asarray(self._ray_y)
-        inv_dd = self._ray_inv_dd  # numpy: a compile-time constant
+        X, Y = jnp.asarray(X), jnp.asarray(Y)  # inv_dd stays numpy: a compile-time constant
         n_views, n_rays = eye.shape[0], X.shape[0]
+        if hidden is not None and np.shape(hidden) != (n_views, len(self._prims)):
+            raise ValueError(f"hidden has shape {np.shape(hidden)}; expected {(n_views, len(self._prims))}")
 
         # Running nearest hit and its payload. Starting t at `far` clips everything beyond it.
         t_best = jnp.full((n_views, n_rays), self.far, f32)
@@ -222,9 +229,8 @@ class Renderer:
             shade = self._ambient + self._sun[1] * jnp.maximum(ndot([sun[p, i] for i in range(3)]), 0.0)
             if self._head > 0:
                 shade = shade + self._head * jnp.maximum(ndot(a[2]), 0.0)
-            own = self._own[:, p]
-            if own.any():  # the agent's own body: never seen from its own eye
-                t = jnp.where(jnp.asarray(own)[:, None], jnp.inf, t)
+            if hidden is not None and np.any(hidden[:, p]):
+                t = jnp.where(jnp.asarray(hidden[:, p])[:, None], jnp.inf, t)
             better = t < t_best
             t_best = jnp.where(better, t, t_best)
             shade_best = jnp.where(better, shade, shade_best)
@@ -246,8 +252,25 @@ class Renderer:
         colour = jnp.asarray(self._table).at[texel].get(mode="promise_in_bounds")
         colour = colour * shade[..., None]  # [V,R,3], 0..255
         rgb = jnp.clip(jnp.round(colour), 0, 255).astype(jnp.uint8)
-        n = self.image
         return rgb.reshape(n_views, n, n, 3), gid.reshape(n_views, n, n)
+
+    def hide_bodies(self, bodies_per_view) -> np.ndarray:
+        """The `hidden` mask for `view` that leaves out, in view v, the geoms of the bodies
+        `bodies_per_view[v]`."""
+        return np.asarray([[p.body in {int(b) for b in bodies} for p in self._prims] for bodies in bodies_per_view])
+
+
+def _pixel_rays(n: int, fovy: float):
+    """Pixel-centre rays of an n x n camera in camera coordinates (x right, y up, looking along
+    -z), ray r = row * n + column, row 0 on top: x [R], y [R] and 1/|d|^2 [R] (float32 numpy).
+    Aspect 1, so the horizontal half-extent equals the vertical one."""
+    half = math.tan(math.radians(fovy) / 2.0)
+    centres = (np.arange(n) + 0.5) / n * 2.0 - 1.0
+    x = np.tile(half * centres, n).astype(np.float32)
+    y = np.repeat(-half * centres, n).astype(np.float32)
+    # 1/|d|^2 of (x, y, -1): rotations keep |d|, so it is the same in every local frame.
+    inv_dd = (1.0 / (x.astype(np.float64) ** 2 + y**2 + 1.0)).astype(np.float32)
+    return x, y, inv_dd
 
 
 def make_renderer(mj_model, image: int, fovy: float = 90.0, agent_body_ids=None, **kw) -> Renderer:
@@ -604,3 +627,26 @@ def _mesh_planes(m, mesh_id) -> np.ndarray:
     # Coplanar triangles (e.g. the two halves of a square base) give the same plane once.
     _, keep = np.unique(np.round(planes / np.array([1, 1, 1, scale]), 5), axis=0, return_index=True)
     return planes[np.sort(keep)].astype(np.float32)
+
+
+# ----------------------------------------------------------------------------- a map view
+OVERHEAD_HEIGHT = 7.5  # metres: with OVERHEAD_FOVY the whole 7.7 m room fits in the picture
+OVERHEAD_FOVY = 60.0
+
+
+def overhead_camera(height: float = OVERHEAD_HEIGHT, centre=(0.0, 0.0)):
+    """A camera `height` metres above `centre` (x, y) looking straight down, image up = world +y,
+    image right = world +x (a map view): pos `[1, 3]` and frame `[1, 3, 3]` for `Renderer.view`."""
+    return np.asarray([[centre[0], centre[1], height]], np.float32), np.eye(3, dtype=np.float32)[None]
+
+
+def project_overhead(points, height: float = OVERHEAD_HEIGHT, fovy: float = OVERHEAD_FOVY, image: int = 128,
+                     centre=(0.0, 0.0)):
+    """Pixel (row, column) of world points `[..., 3]` in `overhead_camera(height, centre)`'s image
+    of side `image` (floats; pixel centres at k + 0.5). NumPy, for drawing on such images."""
+    p = np.asarray(points, np.float64)
+    half = math.tan(math.radians(fovy) / 2.0)
+    depth = height - p[..., 2]
+    u = (p[..., 0] - centre[0]) / (depth * half)  # -1 .. 1 across the image
+    v = (p[..., 1] - centre[1]) / (depth * half)
+    return (1.0 - v) / 2.0 * image, (u + 1.0) / 2.0 * image

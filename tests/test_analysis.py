@@ -1,0 +1,330 @@
+"""Reading sweeps and drawing the paper's figures (mjx_curio/analysis.py), on the session's tiny
+sweeps (tests/conftest.py): the 2-agent `tiny_sweep` (eps, Boltzmann at T=0.5 and 1.5, UCB; 2
+seeds; 200 steps) and the 1-agent `tiny_single_sweep` (eps, UCB; one seed each).
+
+The numbers behind the figures are checked against direct NumPy computations; every figure
+function is drawn and must leave no empty panel; bad directories raise SweepError naming what is
+missing and where.
+"""
+
+import json
+import shutil
+
+import mjx_curio  # noqa: F401  (XLA flags before JAX initialises)
+
+import matplotlib  # noqa: E402
+
+matplotlib.use("Agg")
+import matplotlib.pyplot as plt  # noqa: E402
+import numpy as np  # noqa: E402
+import pytest  # noqa: E402
+
+from mjx_curio import analysis as an  # noqa: E402
+
+
+@pytest.fixture(scope="module")
+def sweep(tiny_single_started, tiny_sweep):  # starts the single-agent sweep in the background first
+    return an.load(tiny_sweep)
+
+
+@pytest.fixture(scope="module")
+def single(tiny_single_sweep):
+    return an.load(tiny_single_sweep)
+
+
+# ---------------------------------------------------------------------------------- loading
+
+
+def test_load(sweep, tiny_sweep):
+    manifest = json.loads((tiny_sweep / "manifest.json").read_text())
+    assert [r.name for r in sweep.runs] == [r["name"] for r in manifest["runs"]]
+    assert sweep.n_runs == 8 and sweep.n_agents == 2 and sweep.agent_names == ["green", "purple"]
+    np.testing.assert_array_equal(sweep.steps, np.arange(1, 11) * 20)
+    for name, spec in manifest["metrics"]["schema"].items():
+        arr = sweep.metrics[name]
+        assert arr.shape[:2] == (8, 10), name
+        assert arr.dtype == np.dtype(spec["dtype"]), name
+        np.testing.assert_array_equal(arr, np.load(tiny_sweep / "metrics" / f"{name}.npy")[:, :10])
+    assert sweep.table["policy"].tolist() == [r["policy"] for r in manifest["runs"]]
+    assert "8 runs" in sweep.describe() and "100, 200" in sweep.describe()
+
+
+def test_select_and_groups(sweep):
+    b = sweep.select(policy="boltzmann")
+    assert [sweep.runs[i].policy for i in b] == ["boltzmann"] * 4
+    t05 = sweep.select(policy="boltzmann", temperature=0.5)
+    assert len(t05) == 2 and all(sweep.runs[i].temperature == 0.5 for i in t05)
+    assert sweep.select(seed=1, policy=["eps", "ucb"]).tolist() == [1, 7]
+    with pytest.raises(an.SweepError, match="no run"):
+        sweep.select(policy="ucb", ucb_c=3.0)
+    groups = sweep.groups()
+    assert [g.label for g in groups] == ["ε-greedy (ε=0.2)", "Boltzmann (T=0.5)", "Boltzmann (T=1.5)", "UCB (c=1)"]
+    assert all(g.n == 2 for g in groups)
+    assert sweep.group("ucb").label == "UCB (c=1)"
+    assert sweep.group(3).indices.tolist() == [3]
+    assert sweep.group(sweep.runs[5].name).indices.tolist() == [5]
+    with pytest.raises(an.SweepError, match="neither a policy"):
+        sweep.group("nonsense")
+
+
+def test_configs_from_manifest(sweep):
+    import dataclasses
+
+    from mjx_curio.sweep import grid
+
+    cfg = sweep.run_config()
+    assert cfg.image == 16 and cfg.n_agents == 2 and cfg.learner.image == 16 and cfg.learner.n_agents == 2
+    assert cfg.learner.vae_channels == tuple(sweep.manifest["run_config"]["learner"]["vae_channels"])
+    assert json.loads(json.dumps(dataclasses.asdict(cfg))) == sweep.manifest["run_config"]
+    assert sweep.run_specs() == grid(dict(sweep.manifest["config"], policies=tuple(sweep.manifest["config"]["policies"]),
+                                          eps=tuple(sweep.manifest["config"]["eps"]),
+                                          temperature=tuple(sweep.manifest["config"]["temperature"]),
+                                          ucb_c=tuple(sweep.manifest["config"]["ucb_c"])))
+
+
+def test_find_sweeps(tiny_sweeps_dir, tiny_sweep):
+    assert an.find_sweeps(tiny_sweep) == [tiny_sweep]
+    sweeps = an.load_sweeps(tiny_sweeps_dir)
+    assert [s.name for s in sweeps] == ["multi", "single"]
+    single, multi = an.pick_single_multi(sweeps)
+    assert single.n_agents == 1 and multi.n_agents == 2
+
+
+# ---------------------------------------------------------------------------------- statistics
+
+
+def test_moving_average_matches_numpy():
+    rng = np.random.default_rng(0)
+    x = rng.normal(size=(3, 120))
+    w = 50
+    ma = an.moving_average(x, w, axis=1)
+    for r in range(3):
+        valid = np.convolve(x[r], np.ones(w) / w, mode="valid")  # full windows
+        np.testing.assert_allclose(ma[r, w - 1 :], valid, rtol=1e-12, atol=1e-12)
+        np.testing.assert_allclose(ma[r, : w - 1], np.cumsum(x[r, : w - 1]) / np.arange(1, w), rtol=1e-12)
+    y = x.copy()
+    y[0, 10:20] = np.nan  # NaNs are skipped
+    ma = an.moving_average(y, 5, axis=1)
+    assert np.isnan(ma[0, 14:20]).all() and np.isfinite(ma[0, 20])
+    np.testing.assert_allclose(ma[0, 21], y[0, 20:22].mean())
+
+
+def test_mean_ci():
+    x = np.array([[1.0, 2.0], [2.0, 2.0], [4.0, np.nan], [5.0, 2.0], [3.0, 2.0]])
+    mean, lo, hi, n = an.mean_ci(x)
+    half = 2.776 * np.std(x[:, 0], ddof=1) / np.sqrt(5)
+    np.testing.assert_allclose([mean[0], lo[0], hi[0]], [3.0, 3.0 - half, 3.0 + half], rtol=1e-4)
+    assert n.tolist() == [5, 4] and lo[1] == hi[1] == 2.0
+    _, lo, hi, _ = an.mean_ci(np.ones((1, 3)))
+    assert np.isnan(lo).all() and np.isnan(hi).all()
+    np.testing.assert_allclose(an.t_quantile_975([1, 9, 30, 1000]), [12.706, 2.262, 2.042, 1.962], atol=2e-3)
+
+
+# ---------------------------------------------------------------------------------- figure data
+
+
+@pytest.mark.parametrize("kind", ["object", "agent"])
+def test_cumulative_interactions(sweep, kind):
+    d = an.cumulative_interactions(sweep, kind)
+    top = d.pop("_max")
+    raw = (sweep.metrics["contact_object"].sum(axis=(2, 3)) if kind == "object"
+           else sweep.metrics["contact_agent"].max(axis=2))
+    means = [np.cumsum(raw[g.indices], axis=1).mean(axis=0)[-1] for g in sweep.groups()]
+    assert top == pytest.approx(max(means))
+    for label, v in d.items():
+        assert np.all(np.diff(v["mean"]) >= 0), label
+        assert np.all(np.diff(v["runs"], axis=1) >= 0), label
+    finals = [v["mean"][-1] for v in d.values()]
+    if top > 0:
+        assert max(finals) == pytest.approx(1.0) and max(np.nanmax(v["mean"]) for v in d.values()) == pytest.approx(1.0)
+    else:
+        assert max(finals) == 0.0
+
+
+def test_action_totals_sum_to_steps(sweep):
+    for g in sweep.groups():
+        tot = an.action_totals(sweep, g)
+        assert tot.shape == (g.n, 2, len(sweep.actions))
+        taken = sweep.metrics["steps_taken"][g.indices].sum(axis=1)
+        np.testing.assert_array_equal(tot.sum(axis=2), np.repeat(taken[:, None], 2, axis=1))
+        np.testing.assert_array_equal(taken, 200)
+
+
+def test_interaction_frequency(sweep):
+    g = sweep.group("ucb")
+    steps, f = an.interaction_frequency(sweep, g, every=100)
+    assert steps.tolist() == [100, 200] and f.shape == (2, 2, 4)
+    c = sweep.metrics["contact_object"][g.indices]
+    np.testing.assert_allclose(f[:, 0], c[:, :5].sum(axis=(1, 2)) / (100 * 2))
+    assert np.all((f >= 0) & (f <= 1))
+    _, f0 = an.interaction_frequency(sweep, g, every=100, agent=0)
+    np.testing.assert_allclose(f0[:, 1], c[:, 5:, 0].sum(axis=1) / 100)
+
+
+def test_observation_classes(sweep, single):
+    d = an.observation_classes(sweep)
+    assert d["cls"].shape == (8, 10, 2) and d["count"].sum() == 8 * 10 * 2
+    touched = (sweep.metrics["contact_object"].sum(axis=3) > 0) | (sweep.metrics["contact_agent"] > 0)
+    np.testing.assert_array_equal(d["cls"] == 0, touched)
+    with pytest.raises(an.SweepError, match="two"):
+        an.observation_classes(single)
+
+
+def test_headline_table(sweep, single):
+    t = an.headline_table(sweep)
+    assert [r[0] for r in t.rows] == [g.label for g in sweep.groups()]
+    assert len(t.columns) == len(t.rows[0])
+    md = t.to_markdown()
+    assert "UCB (c=1)" in md and "±" in md
+    assert t.to_csv().splitlines()[0].startswith("group,policy")
+    obj = sweep.metrics["contact_object"][sweep.group("ucb").indices].sum(axis=(1, 2, 3))
+    row = t.values[[r["group"] for r in t.values].index("UCB (c=1)")]
+    assert row["object_contacts_mean"] == pytest.approx(obj.mean())
+    assert "n/a" in an.headline_table(single).rows[0]  # no agent-agent contacts with one agent
+
+
+def test_reconstructions(sweep):
+    rec = an.reconstructions(sweep, run=2, n_frames=6)
+    assert rec.steps == [100, 200]
+    assert rec.frames.shape == (6, 16, 16, 3) and rec.frames.dtype == np.uint8
+    assert [s[1] for s in rec.sources[:4]] == [2, 2, 2, 2]  # the run's own views first
+    raw = sweep.restore_raw(200)
+    s, i, a = rec.sources[3]
+    np.testing.assert_array_equal(rec.frames[3], sweep.restore_raw(s)["frames"][i, a])
+    for step in rec.steps:
+        assert rec.decoded[step].shape == (6, 16, 16, 3)
+        assert 0 <= rec.decoded[step].min() and rec.decoded[step].max() <= 1
+    assert not np.allclose(rec.decoded[100], rec.decoded[200])  # the VAE learned in between
+    p = sweep.params(200, 2)
+    np.testing.assert_array_equal(p["vae"]["fc"]["kernel"], raw["learner"]["vae"]["fc"]["kernel"][2])
+
+
+# ---------------------------------------------------------------------------------- figures
+
+
+def _has_data(ax):
+    lines = any(np.isfinite(np.asarray(ln.get_ydata(), float)).any() for ln in ax.lines)
+    return lines or ax.collections or ax.patches or ax.images
+
+
+def test_every_figure_draws(sweep, single, tmp_path):
+    draws = [
+        lambda ax: an.plot_curiosity(sweep, ax, "ucb"),
+        lambda ax: an.plot_curiosity(single, ax, "eps"),
+        lambda ax: an.plot_curiosity_groups(sweep, ax),
+        lambda ax: an.plot_temperatures(sweep, ax),
+        lambda ax: an.plot_single_vs_multi(single, sweep, ax),
+        lambda ax: an.plot_vae_single_vs_multi(single, sweep, ax),
+        lambda ax: an.plot_cumulative_interactions(sweep, ax, "object"),
+        lambda ax: an.plot_cumulative_interactions(sweep, ax, "agent"),
+        lambda ax: an.plot_interaction_frequency(sweep, ax, "eps"),
+        lambda ax: an.plot_action_histogram(sweep, ax, "boltzmann"),
+        lambda ax: an.plot_view_fractions(sweep, ax, "ucb", agent=1),
+        lambda ax: an.plot_observational(sweep, ax),
+    ]
+    for i, draw in enumerate(draws):
+        fig, ax = plt.subplots()
+        assert draw(ax) is ax
+        assert _has_data(ax), i
+        assert ax.get_title() and ax.get_xlabel() and ax.get_ylabel(), i
+        path = an.save_figure(fig, tmp_path, f"fig{i}")
+        assert path.stat().st_size > 1000
+        plt.close(fig)
+    fig, axes = plt.subplots(1, 3)
+    an.plot_losses(sweep, axes)
+    assert all(_has_data(ax) for ax in axes)
+    plt.close(fig)
+    fig = plt.figure()
+    an.plot_reconstructions(sweep, fig, run=0, n_frames=4)
+    assert len(fig.axes) == 3 * 4 and all(ax.images for ax in fig.axes)
+    plt.close(fig)
+
+
+def test_curiosity_figure_values(sweep):
+    fig, ax = plt.subplots()
+    an.plot_curiosity(sweep, ax, "ucb", window=3)
+    g = sweep.group("ucb")
+    ma = an.moving_average(sweep.metrics["curiosity_sample"][g.indices, :, 1], 3, axis=1).mean(axis=0)
+    drawn = [ln for ln in ax.lines if ln.get_label() == "purple agent: moving average (3 points)"]
+    np.testing.assert_allclose(drawn[0].get_ydata(), ma, rtol=1e-6)
+    plt.close(fig)
+
+
+def test_empty_figure_refused(tmp_path):
+    fig, ax = plt.subplots()
+    ax.plot([1, 2], [np.nan, np.nan])
+    ax.set_title("nothing")
+    with pytest.raises(an.SweepError, match="empty axes: nothing"):
+        an.save_figure(fig, tmp_path, "empty")
+    plt.close(fig)
+
+
+def test_figures_never_written_into_sweep_outputs(sweep, tiny_sweep):
+    fig, ax = plt.subplots()
+    ax.plot([0, 1])
+    for bad in (tiny_sweep / "metrics", tiny_sweep / "checkpoints" / "x", tiny_sweep):
+        with pytest.raises(an.SweepError, match="refusing"):
+            an.save_figure(fig, bad, "x")
+    assert an.figures_dir(tiny_sweep) == tiny_sweep / "figures"
+    plt.close(fig)
+
+
+# ---------------------------------------------------------------------------------- bad input
+
+
+def test_not_a_sweep(tmp_path):
+    with pytest.raises(an.SweepError, match="does not exist"):
+        an.load(tmp_path / "nowhere")
+    with pytest.raises(an.SweepError, match="no manifest.json"):
+        an.load(tmp_path)
+    with pytest.raises(an.SweepError, match="none of its subdirectories"):
+        an.find_sweeps(tmp_path)
+    (tmp_path / "manifest.json").write_text("{not json")
+    with pytest.raises(an.SweepError, match="not valid JSON"):
+        an.load(tmp_path)
+    (tmp_path / "manifest.json").write_text(json.dumps({"format": "something/2"}))
+    with pytest.raises(an.SweepError, match="format 'something/2'"):
+        an.load(tmp_path)
+
+
+def _copy_without(src, dst, *leave_out):
+    shutil.copytree(src, dst, ignore=lambda d, names: [n for n in names if n in leave_out])
+    return dst
+
+
+def test_missing_parts(tiny_sweep, tmp_path):
+    d = _copy_without(tiny_sweep, tmp_path / "a", "kl.npy", "checkpoints")
+    with pytest.raises(an.SweepError, match=r"metrics file .*kl\.npy is missing"):
+        an.load(d)
+    np.save(d / "metrics" / "kl.npy", np.zeros((8, 3), np.float32))
+    with pytest.raises(an.SweepError, match=r"kl\.npy has shape \(8, 3\)"):
+        an.load(d)
+    shutil.copy(tiny_sweep / "metrics" / "kl.npy", d / "metrics" / "kl.npy")
+    s = an.load(d)  # metrics alone are enough to load
+    with pytest.raises(an.SweepError, match=r"has no checkpoints: .*checkpoints/state does not exist"):
+        s.checkpoint_steps()
+    with pytest.raises(an.SweepError, match="no checkpoints"):
+        an.reconstructions(s)
+    e = _copy_without(tiny_sweep, tmp_path / "b", "metrics")
+    with pytest.raises(an.SweepError, match="no metrics directory"):
+        an.load(e)
+    f = _copy_without(tiny_sweep, tmp_path / "c", "progress.json")
+    with pytest.raises(an.SweepError, match="no finished metrics yet"):
+        an.load(f)
+
+
+def test_missing_checkpoint_step(sweep):
+    with pytest.raises(an.SweepError, match=r"no checkpoint at step 150: .*state/150 does not exist; checkpoints exist "
+                                            r"at steps 100, 200"):
+        sweep.restore_raw(150)
+    with pytest.raises(an.SweepError, match="step 150"):
+        an.reconstructions(sweep, 0, steps=[100, 150])
+    with pytest.raises(an.SweepError, match="out of range"):
+        sweep.run(8)
+
+
+def test_wrong_sweep_kind(sweep, single):
+    with pytest.raises(an.SweepError, match="not a single-agent sweep"):
+        an.plot_single_vs_multi(sweep, sweep, None)
+    with pytest.raises(an.SweepError, match="no Boltzmann runs"):
+        an.plot_temperatures(single, None)
