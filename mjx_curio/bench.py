@@ -22,8 +22,10 @@ the paper's PyTorch VAE update, batch 32 of 64 x 64, runs at about 234 images/s 
 what=sweep: the sweep's own program on `runs` runs (2 agents, 64 x 64, batch 16, an update
 every 4 steps, replay 10,000 by default): aggregate run-steps/s (a run-step = every agent of one
 run acts once; agent-steps/s counts each agent), compile time and peak memory. The issue's
-target: >= 35 aggregate steps/s for 24 runs (ten times the paper's own code, 3.5 steps/s for one
-run, FACTS.md) with peak memory under 16 GiB.
+target: >= 35 aggregate agent-steps/s for 24 runs (ten times the paper's own code, "about 3.5
+agent steps per second" for one multi-agent run, FACTS.md) with peak memory under 16 GiB. Both
+figures are printed, and the verdict for each reading: 35 agent-steps/s, and the stricter 35
+run-steps/s (70 agent-steps/s with two agents).
 
 Every timing is the best of `repeats` blocks after one untimed warm-up call, each block ended
 by block_until_ready. Inputs are random: speed does not depend on the values.
@@ -367,8 +369,10 @@ def main(argv=None) -> dict | None:
         ok = result["world_steps_per_s"] >= 500 and result["compile_s"] <= 60
         print(f"target: >= 500 world-steps/s and compile <= 60 s: {'met' if ok else 'NOT met'}")
     if result["what"] == "sweep" and (args["runs"], args["agents"], args["image"], args["batch"], args["update_every"]) == (24, 2, 64, 16, 4):
-        ok = result["run_steps_per_s"] >= 35 and result["peak_rss_mib"] < 16 * 1024
-        print(f"target: >= 35 aggregate steps/s with peak memory < 16 GiB: {'met' if ok else 'NOT met'}")
+        mem = result["peak_rss_mib"] < 16 * 1024
+        for unit in ("agent_steps_per_s", "run_steps_per_s"):
+            ok = result[unit] >= 35 and mem
+            print(f"target: >= 35 aggregate {unit} with peak memory < 16 GiB: {'met' if ok else 'NOT met'}")
     print(json.dumps(result), flush=True)
     return result
 
