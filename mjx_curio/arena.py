@@ -149,7 +149,7 @@ class Arena:
         # Kinematics (poses for the renderer) rather than a full forward: mjx.step runs its own
         # forward first, and kinematics compiles in ~2 s where forward's collision and solver
         # take ~25 s on the CPU.
-        data = mjx.kinematics(self.model, mjx.make_data(self.model).replace(qpos=qpos))
+        data = mjx.kinematics(self.model, mjx.make_data(self.model, device=jax.local_devices()[0]).replace(qpos=qpos))
         return EnvState(
             data=data,
             step=jnp.zeros((), jnp.int32),
@@ -261,7 +261,9 @@ def _build(walls: str, n_agents: int, image: int, jitter: float) -> Arena:
     for i in range(n_agents):
         qpos0[qpos_yaw[i]] = _START_YAW[i] if n_agents == 2 else 0.0
 
-    model = mjx.put_model(m)
+    # On this process's own first device: MJX's default, jax.devices()[0], belongs to process 0
+    # under jax.distributed, and other processes could not use arrays placed there.
+    model = mjx.put_model(m, device=jax.local_devices()[0])
     contact_object, contact_agent = _contact_tables(m, model, agents)
     agent_bodies = np.array([name(B, a) for a in agents])
     if not np.array_equal(agent_bodies, np.arange(m.nbody - n_agents, m.nbody)):

@@ -129,7 +129,7 @@ class Checkpoints:
         target structure needed (what analysis.py uses to decode with saved parameters). Reads a
         sweep saved on any number of devices, e.g. on a GPU host, on a one-CPU laptop."""
         path = self.directory / "state" / str(step) / "default"
-        local = jax.sharding.SingleDeviceSharding(jax.devices()[0])
+        local = jax.sharding.SingleDeviceSharding(jax.local_devices()[0])
         with ocp.StandardCheckpointer() as reader:
             meta = reader.metadata(path)
             tree = getattr(meta, "item_metadata", meta)

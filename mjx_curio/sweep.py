@@ -322,14 +322,15 @@ def execute(p: Plan) -> int:
     while step < v["steps"]:
         states = _inject_fault(states, step)
         states, m = program.chunk(states)
+        # Gathers are collectives: every process takes part, whatever it then writes.
         m = {k: _host(x)[:n_runs] for k, x in m.items()}
+        halted = np.asarray(_host(states.halted))[:n_runs]
+        halted_at = np.asarray(_host(states.halted_step))[:n_runs]
         w0 = step // v["metrics_every"]
         step += v["chunk"]
         if lead:
             store.write(w0, m)
             store.flush()
-            halted = np.asarray(_host(states.halted))[:n_runs]
-            halted_at = np.asarray(_host(states.halted_step))[:n_runs]
             for r in np.flatnonzero(halted):
                 if str(r) not in halted_seen:
                     halted_seen.add(str(r))
@@ -403,6 +404,10 @@ def _compiled(cfg, chunk: int, devices: tuple):
 
     from mjx_curio import run as run_lib
 
+    # The arena (MJX model arrays, contact tables) is built here, outside the sharded trace:
+    # built inside it on a multi-process mesh, its arrays spanned the other processes' devices
+    # and could not be closed over.
+    cfg.arena  # noqa: B018
     mesh = jax.make_mesh((len(devices),), ("runs",), devices=devices)
     spec = P("runs")
     # Each device advances its own runs and nothing crosses devices, so shard_map's check of
@@ -465,7 +470,12 @@ def _setup_jax(v: dict) -> None:
     import jax
 
     if v["distributed"] == "true" or (v["distributed"] == "auto" and _cluster_detected()):
-        jax.distributed.initialize()  # coordinator, process count and id from the environment
+        # Coordinator, process count and id from the environment: SLURM's or Open MPI's, which
+        # JAX reads itself, or plain JAX_COORDINATOR_ADDRESS, JAX_NUM_PROCESSES, JAX_PROCESS_ID.
+        env = os.environ
+        count, index = env.get("JAX_NUM_PROCESSES"), env.get("JAX_PROCESS_ID")
+        jax.distributed.initialize(num_processes=int(count) if count else None,
+                                   process_id=int(index) if index else None)
     cache = v["compile_cache"]
     if cache.lower() != "none":
         path = pathlib.Path(os.path.expanduser(cache))

@@ -100,7 +100,7 @@ def _abstract_states(cfg, n_total: int):
         return run_lib.init_run(cfg, jnp.zeros((2,), jnp.uint32), policies.make_policy_params(0, 0.2, 1.0, 1.0))
 
     shapes = jax.eval_shape(one)
-    sharding = SingleDeviceSharding(jax.devices()[0])
+    sharding = SingleDeviceSharding(jax.local_devices()[0])
     return jax.tree.map(lambda s: jax.ShapeDtypeStruct((n_total,) + s.shape, s.dtype, sharding=sharding), shapes)
 
 

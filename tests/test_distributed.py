@@ -1,0 +1,48 @@
+"""Several processes, one sweep: `jax.distributed` with two CPU processes on this machine.
+
+Each process runs the same `python -m mjx_curio.sweep` command with JAX_COORDINATOR_ADDRESS,
+JAX_NUM_PROCESSES and JAX_PROCESS_ID set, as a cluster scheduler would start it on two hosts;
+the runs axis spans both processes' devices. The result must equal the tiny sweep (to float
+rounding, as for two devices in one process: tests/test_sweep.py).
+
+Opt-in (MJX_CURIO_MULTIPROCESS=1): two more compiles, ~90 s on two cores, which the default
+suite leaves out to stay well under its time budget. Measured 2026-11-22: passes, and the two-
+process sweep is bit-identical to the two-device one.
+"""
+
+import json
+import os
+import socket
+import subprocess
+import sys
+
+import pytest
+
+from conftest import CACHE, TINY_SWEEP
+from test_sweep import _assert_close_metrics, _assert_close_tree, _metrics, _state
+
+pytestmark = pytest.mark.skipif(os.environ.get("MJX_CURIO_MULTIPROCESS") != "1",
+                                reason="multi-process sweep: opt in with MJX_CURIO_MULTIPROCESS=1 (~90 s)")
+
+
+def _free_port() -> int:
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        return s.getsockname()[1]
+
+
+def test_two_processes_equal_one(tiny_sweep, tmp_path):
+    out = tmp_path / "two_processes"
+    port = _free_port()
+    procs = [subprocess.Popen([sys.executable, "-m", "mjx_curio.sweep", *TINY_SWEEP, f"out={out}", f"compile_cache={CACHE}"],
+                              stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True,
+                              env=dict(os.environ, JAX_COORDINATOR_ADDRESS=f"127.0.0.1:{port}", JAX_NUM_PROCESSES="2",
+                                       JAX_PROCESS_ID=str(i)))
+             for i in range(2)]
+    errors = [p.communicate(timeout=900)[1] for p in procs]
+    for p, err in zip(procs, errors):
+        assert p.returncode == 0, err[-4000:]
+    device = json.loads((out / "manifest.json").read_text())["device"]
+    assert (device["processes"], device["count"]) == (2, 2)
+    _assert_close_metrics(_metrics(out), _metrics(tiny_sweep), "2 processes vs 1")
+    _assert_close_tree(_state(out, 200), _state(tiny_sweep, 200), "final checkpoint, 2 processes vs 1")
