@@ -122,6 +122,8 @@ def grid(values: dict) -> tuple:
 def plan(values: dict, now: datetime.datetime | None = None) -> Plan:
     """Every check of the command line and of `out`, without side effects."""
     v = dict(values)
+    if v["distributed"] != "false":
+        _process_env()
     steps, chunk = v["steps"], v["chunk"]
     for name in ("update_every", "metrics_every"):
         if chunk % v[name]:
@@ -472,15 +474,25 @@ def _setup_jax(v: dict) -> None:
     if v["distributed"] == "true" or (v["distributed"] == "auto" and _cluster_detected()):
         # Coordinator, process count and id from the environment: SLURM's or Open MPI's, which
         # JAX reads itself, or plain JAX_COORDINATOR_ADDRESS, JAX_NUM_PROCESSES, JAX_PROCESS_ID.
-        env = os.environ
-        count, index = env.get("JAX_NUM_PROCESSES"), env.get("JAX_PROCESS_ID")
-        jax.distributed.initialize(num_processes=int(count) if count else None,
-                                   process_id=int(index) if index else None)
+        count, index = _process_env()
+        jax.distributed.initialize(num_processes=count, process_id=index)
     cache = v["compile_cache"]
     if cache.lower() != "none":
         path = pathlib.Path(os.path.expanduser(cache))
         path.mkdir(parents=True, exist_ok=True)
         jax.config.update("jax_compilation_cache_dir", str(path))
+
+
+def _process_env() -> tuple[int | None, int | None]:
+    """JAX_NUM_PROCESSES and JAX_PROCESS_ID from the environment (None where unset)."""
+    env = os.environ
+    count, index = env.get("JAX_NUM_PROCESSES") or None, env.get("JAX_PROCESS_ID") or None
+    if count is not None and not (count.isdigit() and int(count) >= 1):
+        raise ConfigError(f"JAX_NUM_PROCESSES={count!r} must be a positive integer (the number of processes)")
+    if index is not None and not (index.isdigit() and (count is None or int(index) < int(count))):
+        raise ConfigError(f"JAX_PROCESS_ID={index!r} must be an integer from 0 to JAX_NUM_PROCESSES - 1"
+                          f"{f' = {int(count) - 1}' if count else ''}")
+    return (int(count) if count else None), (int(index) if index else None)
 
 
 def _cluster_detected() -> bool:

@@ -293,3 +293,17 @@ def test_every_paper_preset_plans_and_command_line_keys_override_it(tmp_path):
         1, "different", ("eps",), "runs/paper/single_agent_walls_different")
     with pytest.raises(ConfigError, match="preset='nope' is not allowed; choose one of: none, single_agent"):
         sweep_lib.apply_preset(["preset=nope"])
+
+
+@pytest.mark.parametrize("env, message", [
+    ({"JAX_NUM_PROCESSES": "two"}, "JAX_NUM_PROCESSES='two' must be a positive integer"),
+    ({"JAX_NUM_PROCESSES": "2", "JAX_PROCESS_ID": "2"}, "JAX_PROCESS_ID='2' must be an integer from 0 to JAX_NUM_PROCESSES - 1 = 1"),
+])
+def test_bad_process_environment_stops_before_any_work(env, message, tmp_path, monkeypatch):
+    for k, val in env.items():
+        monkeypatch.setenv(k, val)
+    values = sweep_lib.cli.parse([f"out={tmp_path / 'x'}"], sweep_lib.KEYS)
+    with pytest.raises(ConfigError, match=message):
+        sweep_lib.plan(values)
+    assert not (tmp_path / "x").exists()
+    sweep_lib.plan({**values, "distributed": "false"})  # not used unless distributed
