@@ -10,7 +10,7 @@ them over worlds, scan them over steps. The `Arena` object itself only holds
 constants (the MuJoCo model, index tables) and is hashable by identity, so it can
 be closed over or passed as a static argument.
 
-Actions (paper 3.3, FACTS.md), all in the agent's own frame and applied to every
+Actions (paper 3.3; docs/paper_setup.md), all in the agent's own frame and applied to every
 agent at the same instant before physics advances one 1/60 s step:
 forward/backward push 50 N along the heading, left/right push 50 N to the agent's
 left/right, rotate_left/rotate_right turn at 5 rad/s (counter-clockwise seen from
@@ -23,6 +23,7 @@ from __future__ import annotations
 
 import contextlib
 import dataclasses
+import importlib.resources
 import io
 import pathlib
 from typing import Any
@@ -41,7 +42,25 @@ with contextlib.redirect_stdout(io.StringIO()):
 from mjx_curio import render as render_lib
 from mjx_curio.config import ConfigError, check_choice, check_float, check_int
 
-SCENES = pathlib.Path(__file__).resolve().parent.parent / "scenes"
+
+def _scenes_dir() -> pathlib.Path:
+    """The directory of the MJCF scenes and their textures: the package `mjx_curio.scenes`, which
+    pyproject.toml maps to the repository's top-level scenes/ directory, so any install (wheel,
+    `pip install .`, editable) carries it. MuJoCo needs real files (the scenes include each other
+    and name their textures by relative path): setuptools installs package data as real files;
+    anything else (a zipped install) is extracted once for the process."""
+    try:
+        res = importlib.resources.files("mjx_curio.scenes")
+    except ModuleNotFoundError:  # a source checkout put on sys.path without installing it
+        return pathlib.Path(__file__).resolve().parent.parent / "scenes"
+    if isinstance(res, pathlib.Path):
+        return res
+    return pathlib.Path(_RESOURCES.enter_context(importlib.resources.as_file(res)))
+
+
+_RESOURCES = contextlib.ExitStack()
+SCENES = _scenes_dir()
+
 ACTIONS = ("forward", "backward", "left", "right", "rotate_left", "rotate_right", "stop")
 OBJECTS = ("pyramid", "cylinder", "sphere", "disc")
 WALLS = ("same", "different")
@@ -76,7 +95,7 @@ _ACTION_TABLE = np.array(
     np.float32,
 )
 
-# Start headings: green faces +x, purple faces -x (FACTS.md).
+# Start headings: green faces +x, purple faces -x, as in the authors' code (docs/paper_setup.md).
 _START_YAW = (0.0, np.pi)
 
 
@@ -92,6 +111,7 @@ class EnvState:
 
 
 def scene_path(walls: str, n_agents: int) -> pathlib.Path:
+    """The file of scene `arena_<walls>_<n_agents>.xml` (in the package mjx_curio.scenes)."""
     return SCENES / f"arena_{walls}_{n_agents}.xml"
 
 
@@ -218,7 +238,7 @@ def camera(state: EnvState, agent: int) -> tuple[jax.Array, jax.Array]:
 
 
 def make(walls: str = "same", n_agents: int = 2, image: int = 64, jitter: float = 0.0) -> Arena:
-    """Load `scenes/arena_<walls>_<n_agents>.xml` into MJX and build the renderer.
+    """Load `scene_path(walls, n_agents)` (scenes/arena_<walls>_<n_agents>.xml) into MJX and build the renderer.
 
     walls: "same" (one texture on all walls) or "different" (one per wall);
     n_agents: 1 or 2; image: side of each agent's square view in pixels;

@@ -12,18 +12,19 @@ what=env: `runs` worlds vmapped, each step = physics (`Arena.step`) + every agen
 training loop runs it. Reports the setup time (loading the scene, compiling reset and the
 renderer), the compile time of the stepping chunk, steady-state world-steps/s (best of `repeats`
 chunks), a breakdown into physics-only and render-only milliseconds per batched step, and the
-peak resident memory. The issue's target: >= 500 world-steps/s for 24 worlds x 2 agents at
-64 x 64 with rendering, compiling in <= 60 s.
+peak resident memory. Target: >= 500 world-steps/s for 24 worlds x 2 agents at 64 x 64 with
+rendering, compiling in <= 60 s.
 
 what=learner: the VAE update (forward + backward + Adam on `vae_batch` frames) in images/s,
-and one full `learner_update` (VAE + MDN-RNN + self-models) for one run. Reference (FACTS.md):
-the paper's PyTorch VAE update, batch 32 of 64 x 64, runs at about 234 images/s here.
+and one full `learner_update` (VAE + MDN-RNN + self-models) for one run. Reference: the
+authors' PyTorch VAE update, batch 32 of 64 x 64, runs at about 234 images/s on this machine
+class (docs/paper_setup.md).
 
 what=sweep: the sweep's own program on `runs` runs (2 agents, 64 x 64, batch 16, an update
 every 4 steps, replay 10,000 by default): aggregate run-steps/s (a run-step = every agent of one
-run acts once; agent-steps/s counts each agent), compile time and peak memory. The issue's
-target: >= 35 aggregate agent-steps/s for 24 runs (ten times the paper's own code, "about 3.5
-agent steps per second" for one multi-agent run, FACTS.md) with peak memory under 16 GiB. Both
+run acts once; agent-steps/s counts each agent), compile time and peak memory. Target: >= 35
+aggregate agent-steps/s for 24 runs (ten times the authors' own code, about 3.5 agent steps per
+second for one multi-agent run; docs/paper_setup.md) with peak memory under 16 GiB. Both
 figures are printed, and the verdict for each reading: 35 agent-steps/s, and the stricter 35
 run-steps/s (70 agent-steps/s with two agents).
 

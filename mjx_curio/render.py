@@ -1,7 +1,7 @@
 """Batched egocentric cameras as a pure-JAX ray caster: rgb and geom id per pixel.
 
-MJX has no CPU renderer (`mjx.render` needs MuJoCo Warp / CUDA, FACTS.md), so every agent's
-view is ray cast analytically against the scene's visible geoms:
+MJX has no CPU renderer (`mjx.render` needs MuJoCo Warp / CUDA; see docs/paper_setup.md), so
+every agent's view is ray cast analytically against the scene's visible geoms:
 
 * `camera_poses(data, agent_body_ids)`: each agent's eye (0.2 above its body centre, i.e. on
   the top face of its cube) looking horizontally along its heading, as MuJoCo camera frames.
@@ -63,7 +63,7 @@ _TEX_2D = 0
 _TEXROLE_RGB = 1
 _SUPPORTED = {PLANE: "plane", SPHERE: "sphere", CYLINDER: "cylinder", BOX: "box", MESH: "mesh"}
 
-SKY_RGB = (10, 130, 200)  # the paper's background colour (FACTS.md)
+SKY_RGB = (10, 130, 200)  # the paper's background colour (the authors' code; docs/paper_setup.md)
 EYE_HEIGHT = 0.2  # eye above the agent body's centre: the top face of a 0.2 half-extent cube
 NEAR = 0.1
 FAR = 10.0

@@ -18,7 +18,7 @@ import jax.numpy as jnp
 
 from mjx_curio.world_model import Batch
 
-DEFAULT_CAPACITY = 10_000  # FACTS.md: replay buffer 10,000
+DEFAULT_CAPACITY = 10_000  # the authors' replay buffer of 10,000 (docs/paper_setup.md)
 
 
 class Transition(NamedTuple):

@@ -73,7 +73,7 @@ def make_nets(cfg: LearnerConfig) -> Nets:
 
 @functools.lru_cache(maxsize=None)
 def optimizer(cfg: LearnerConfig) -> optax.GradientTransformation:
-    return adam(cfg.lr)  # FACTS.md: Adam 1e-3 for all three models
+    return adam(cfg.lr)  # Adam 1e-3 for all three models, as the authors' code (docs/paper_setup.md)
 
 
 class AdamState(NamedTuple):

@@ -492,7 +492,7 @@ def test_reset_jitter_moves_objects_within_the_bound(rollout):
 
 
 def _paper_layout():
-    """FACTS.md: object body origins, in OBJECTS order (the pyramid's is the centre of its base)."""
+    """docs/paper_setup.md: object body origins, in OBJECTS order (the pyramid's is the centre of its base)."""
     facts = {"pyramid": (-1.5, 0.0, 0.0), "cylinder": (2.4, 0.2, 0.5), "sphere": (0.5, -2.0, 0.3), "disc": (0.0, 2.0, 0.05)}
     return np.array([facts[o] for o in OBJECTS])
 

@@ -1,7 +1,7 @@
 """The MJCF scenes (scenes/): generated files up to date, textures real, geometry as the paper's.
 
-The numbers come from /work/shared/FACTS.md (the paper's arena) and the comments of
-scenes/arena_room.xml (our object masses). Everything is read from compiled `mujoco.MjModel`s,
+The numbers come from docs/paper_setup.md (the paper's arena, as its authors built it) and
+the comments of scenes/arena_room.xml (our object masses). Everything is read from compiled `mujoco.MjModel`s,
 so a typo in an attribute (which MuJoCo may silently ignore or default) is caught too.
 """
 
@@ -95,8 +95,8 @@ def test_wall_textures_are_real_distinct_images(models):
         img = _tex_image(m, tex).astype(np.float64)
         assert img.shape == (64, 256, 3), f"{name}: {img.shape}"
         std = img.reshape(-1, 3).std(axis=0)
-        # Not flat: uniform walls caused the paper's lighting artefacts (FACTS.md). Measured:
-        # per-channel std 8.5 (the wood's blue) to 74; brightness std 15.6 to 44.
+        # Not flat: uniform walls caused the paper's lighting artefacts (docs/paper_setup.md).
+        # Measured: per-channel std 8.5 (the wood's blue) to 74; brightness std 15.6 to 44.
         assert (std > 5).all(), f"{name} is nearly flat: per-channel std {std}"
         assert img.mean(axis=-1).std() > 10, f"{name} has almost no light/dark pattern"
         assert len(np.unique(img.reshape(-1, 3), axis=0)) > 100, f"{name} has few colours"
@@ -243,3 +243,30 @@ def test_collision_proxies_are_invisible_and_match_the_drawn_shapes(models):
     # Everything drawn is one of the things the paper has.
     drawn = {m.geom(g).name for g in range(m.ngeom) if m.geom_group[g] < 3}
     assert drawn == {"floor", *WALLS, "pyramid", "cylinder", "sphere", "disc", "agent_green", "agent_purple"}
+
+
+def test_package_data_ships_every_scene_file():
+    """pyproject.toml installs scenes/ as the package mjx_curio.scenes: its package-data patterns
+    must cover every XML file and every file an XML file names (includes, textures), so a wheel
+    or a `pip install .` loads the scenes as the checkout does; presets.toml ships too."""
+    import re
+    import tomllib
+
+    root = SCENES.parent
+    tool = tomllib.loads((root / "pyproject.toml").read_text())["tool"]["setuptools"]
+    assert tool["package-dir"]["mjx_curio.scenes"] == "scenes"
+    assert {"mjx_curio", "mjx_curio.scenes"} <= set(tool["packages"])
+    assert (SCENES / "__init__.py").exists()  # a regular package, found by importlib.resources
+    shipped = {p.relative_to(SCENES).as_posix() for pat in tool["package-data"]["mjx_curio.scenes"]
+               for p in SCENES.glob(pat)}
+    needed = {p.name for p in SCENES.glob("*.xml")}
+    for xml in SCENES.glob("*.xml"):
+        needed |= set(re.findall(r'\bfile="([^"]+)"', xml.read_text()))
+    assert needed <= shipped, f"not in package-data: {sorted(needed - shipped)}"
+    assert "presets.toml" in tool["package-data"]["mjx_curio"] and (root / "mjx_curio" / "presets.toml").exists()
+
+    from mjx_curio import arena
+
+    for walls, n in VARIANTS:  # read through importlib.resources, wherever the package is installed
+        assert arena.scene_path(walls, n).is_file()
+    assert (arena.SCENES / "textures" / "wall_wood.png").is_file()

@@ -2,7 +2,8 @@
 
 The replay steps a run exactly as the sweep does: filmed from the start (step=0) its curiosity
 rewards and actions are the sweep's own recorded metrics. Every video is read back (GIF with
-Pillow; MP4, when an encoder is installed, with ffprobe or PyAV) for its frame count and size.
+Pillow; MP4 with ffprobe, imageio-ffmpeg or PyAV) for its frame count and size. With the dev
+extras installed (imageio-ffmpeg, which bundles its own ffmpeg) videos are MP4.
 One compiled pair of programs (acts + top-down render, learn; this sweep's config) serves every test.
 """
 
@@ -120,16 +121,40 @@ def test_cli_split(sweep, tiny_sweep, tmp_path, capsys):
             assert got == (size[0] + size[0] % 2, size[1] + size[1] % 2)
 
 
+def _has_imageio_ffmpeg():
+    try:
+        import imageio_ffmpeg  # noqa: F401
+    except ImportError:
+        return False
+    return True
+
+
 def test_write_video(tmp_path, capsys):
     rng = np.random.default_rng(0)
     frames = rng.integers(0, 255, size=(5, 21, 30, 3), dtype=np.uint8)
     gif = video.write_video(frames, tmp_path / "a.gif", fps=5)
     assert _frames(gif, 5) == (5, (30, 21))
     mp4 = video.write_video(frames, tmp_path / "a.mp4", fps=5)
+    if _has_imageio_ffmpeg():  # part of the analysis and dev extras: MP4 with no system ffmpeg
+        assert video.mp4_encoder() is not None
     if video.mp4_encoder() is None:
         assert mp4 == tmp_path / "a.gif" and "no MP4 encoder" in capsys.readouterr().err
     else:
-        assert mp4.suffix == ".mp4" and _frames(mp4, 5) == (5, (30, 22))
+        assert mp4 == tmp_path / "a.mp4" and mp4.read_bytes()[4:8] == b"ftyp"  # an MP4 (ISO BMFF) file
+        assert _frames(mp4, 5) == (5, (30, 22))
+
+
+@pytest.mark.skipif(not _has_imageio_ffmpeg(), reason="imageio-ffmpeg is not installed (pip install -e '.[dev]')")
+def test_mp4_without_system_ffmpeg(tmp_path, monkeypatch):
+    """With no ffmpeg on PATH, imageio-ffmpeg's bundled binary writes the MP4."""
+    import imageio_ffmpeg
+
+    monkeypatch.setattr(video.shutil, "which", lambda name, *a, **k: None)
+    assert video.mp4_encoder() == ("ffmpeg", imageio_ffmpeg.get_ffmpeg_exe())
+    frames = np.random.default_rng(1).integers(0, 255, size=(4, 16, 24, 3), dtype=np.uint8)
+    mp4 = video.write_video(frames, tmp_path / "b.mp4", fps=5)
+    assert mp4 == tmp_path / "b.mp4" and mp4.read_bytes()[4:8] == b"ftyp"
+    assert _frames(mp4, 5) == (4, (24, 16))
     with pytest.raises(video.VideoError, match=".mp4 or .gif"):
         video.write_video(frames, tmp_path / "a.avi")
 
