@@ -257,8 +257,12 @@ def test_package_data_ships_every_scene_file():
     assert tool["package-dir"]["mjx_curio.scenes"] == "scenes"
     assert {"mjx_curio", "mjx_curio.scenes"} <= set(tool["packages"])
     assert (SCENES / "__init__.py").exists()  # a regular package, found by importlib.resources
-    shipped = {p.relative_to(SCENES).as_posix() for pat in tool["package-data"]["mjx_curio.scenes"]
-               for p in SCENES.glob(pat)}
+    shipped = set()
+    for package, patterns in tool["package-data"].items():
+        if package == "mjx_curio.scenes" or package.startswith("mjx_curio.scenes."):
+            assert package in tool["packages"], f"{package} has package-data but is not in packages"
+            folder = SCENES.joinpath(*package.split(".")[2:])
+            shipped |= {p.relative_to(SCENES).as_posix() for pat in patterns for p in folder.glob(pat)}
     needed = {p.name for p in SCENES.glob("*.xml")}
     for xml in SCENES.glob("*.xml"):
         needed |= set(re.findall(r'\bfile="([^"]+)"', xml.read_text()))
