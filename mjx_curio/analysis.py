@@ -441,23 +441,35 @@ def pick_single_multi(sweeps: Sequence[Sweep], policy: str = "ucb") -> tuple[Swe
 # ------------------------------------------------------------------------- configs from a manifest
 
 
+def _recorded(cls, recorded: dict) -> dict:
+    """The fields of config dataclass `cls` as a manifest recorded them. A knob newer than the
+    sweep (absent from the record) takes the value the code had before it existed, its `legacy`
+    metadata, so an old sweep loads as what it ran (not as today's default); knobs without
+    one take their default, which was then the behaviour."""
+    from mjx_curio import config as config_lib
+
+    fields = {}
+    for f in config_lib.knobs(cls):
+        if f.name in recorded:
+            value = recorded[f.name]
+            fields[f.name] = tuple(value) if isinstance(value, list) else value
+        elif "legacy" in f.metadata:
+            fields[f.name] = f.metadata["legacy"]
+    return fields
+
+
 def learner_config(manifest: dict):
     """The `config.LearnerConfig` a sweep ran with, from its manifest's run_config.learner."""
     from mjx_curio.config import LearnerConfig
 
-    fields = dict(manifest["run_config"]["learner"])
-    for k in ("vae_channels", "dec_channels"):
-        if k in fields:
-            fields[k] = tuple(fields[k])
-    return LearnerConfig(**fields)
+    return LearnerConfig(**_recorded(LearnerConfig, manifest["run_config"]["learner"]))
 
 
 def run_config(manifest: dict):
     """The `run.RunConfig` a sweep ran with."""
     from mjx_curio.run import RunConfig
 
-    fields = {k: v for k, v in manifest["run_config"].items() if k != "learner"}
-    return RunConfig(**fields, learner=learner_config(manifest))
+    return RunConfig(**_recorded(RunConfig, manifest["run_config"]), learner=learner_config(manifest))
 
 
 def run_specs(manifest: dict) -> tuple:

@@ -17,6 +17,12 @@ left/right, rotate_left/rotate_right turn at 5 rad/s (counter-clockwise seen fro
 above is left), stop zeroes the agent's linear velocity. Linear speed is capped at
 2 m/s. An agent's yaw rate is 5 rad/s only while it rotates, otherwise zero, as
 in the paper's code that set angular velocity directly.
+
+Each agent sees through the authors' camera by default (`camera="authors"`): their 640 x 480
+picture at a vertical field of view of 90 degrees, resized to the square image, so the view is
+squeezed sideways (`Arena.aspect` = 4/3; render.py); `camera="square"` is a square 90-degree
+view (aspect 1). Contacts have the friction MuJoCo would give the two geoms (`friction="geoms"`,
+sliding 0.6), or MuJoCo's <pair> default of 1.0 (`friction="unit"`, sweeps made before).
 """
 
 from __future__ import annotations
@@ -40,7 +46,7 @@ with contextlib.redirect_stdout(io.StringIO()):
     from mujoco import mjx
 
 from mjx_curio import render as render_lib
-from mjx_curio.config import ConfigError, check_choice, check_float, check_int
+from mjx_curio.config import CAMERAS, FRICTIONS, ConfigError, check_choice, check_float, check_int
 
 
 def _scenes_dir() -> pathlib.Path:
@@ -71,6 +77,12 @@ FORCE = 50.0  # N, forward/backward/sideways push
 YAW_RATE = 5.0  # rad/s while rotating
 MAX_SPEED = 2.0  # m/s, planar speed cap
 FOVY = 90.0  # degrees, vertical field of view of every agent's camera
+# The authors' camera renders this many pixels (width, height) and the picture is resized to the
+# square image: aspect 4:3, about 106 degrees horizontally (render.py; docs/paper_setup.md).
+AUTHORS_SOURCE = (640, 480)
+# MuJoCo's default friction of a <pair> (sliding, sliding, torsional, rolling, rolling): what
+# every contact of the scenes had before `friction="geoms"` (see `_pair_friction`).
+UNIT_PAIR_FRICTION = (1.0, 1.0, 0.005, 0.0001, 0.0001)
 # A contact counts as touching when its distance is below this (metres). MJX's
 # box-box, box-sphere and box-capsule functions report a contact only once the
 # shapes overlap (soft contacts rest slightly inside each other), so for those
@@ -126,6 +138,9 @@ class Arena:
     mj_model: mujoco.MjModel
     model: mjx.Model
     fovy: float
+    camera: str  # "authors" (640 x 480 squeezed into the square image) or "square"
+    aspect: float  # width / height of the agents' camera before the squeeze: 4/3 or 1
+    friction: str  # "geoms" or "unit" (`make`)
     # numpy index tables, fixed at construction
     agent_bodies: np.ndarray  # [n_agents] body ids
     agent_geoms: np.ndarray  # [n_agents] geom ids of the cubes
@@ -237,37 +252,64 @@ def camera(state: EnvState, agent: int) -> tuple[jax.Array, jax.Array]:
     return pos[agent], xmat[agent]
 
 
-def make(walls: str = "same", n_agents: int = 2, image: int = 64, jitter: float = 0.0) -> Arena:
+def make(walls: str = "same", n_agents: int = 2, image: int = 64, jitter: float = 0.0,
+         camera: str = "authors", friction: str = "geoms") -> Arena:
     """Load `scene_path(walls, n_agents)` (scenes/arena_<walls>_<n_agents>.xml) into MJX and build the renderer.
 
     walls: "same" (one texture on all walls) or "different" (one per wall);
     n_agents: 1 or 2; image: side of each agent's square view in pixels;
-    jitter: objects start up to this many metres from the paper's layout (0..MAX_JITTER).
+    jitter: objects start up to this many metres from the paper's layout (0..MAX_JITTER);
+    camera: "authors" (their 640 x 480 picture at fovy 90, resized to the square image, so the
+      view is squeezed sideways) or "square" (90 degrees both ways);
+    friction: "geoms" (every contact pair has the friction MuJoCo gives a contact of its two
+      geoms) or "unit" (MuJoCo's pair default, sliding 1.0, as sweeps before this knob).
     """
     check_choice("walls", walls, WALLS)
     check_choice("n_agents", n_agents, N_AGENTS)
     check_int("image", image, 1)
     jitter = check_float("jitter", jitter, 0.0, MAX_JITTER)
-    return _make(walls, int(n_agents), int(image), jitter)
+    check_choice("camera", camera, CAMERAS)
+    check_choice("friction", friction, FRICTIONS)
+    return _make(walls, int(n_agents), int(image), jitter, camera, friction)
 
 
 _CACHE: dict = {}
 
 
-def _make(walls: str, n_agents: int, image: int, jitter: float) -> Arena:
+def _make(walls: str, n_agents: int, image: int, jitter: float, camera: str, friction: str) -> Arena:
     # One Arena per configuration, so jitted functions closing over it are
     # traced once per process (tests build the same arena many times).
-    key = (walls, n_agents, image, jitter)
+    key = (walls, n_agents, image, jitter, camera, friction)
     if key not in _CACHE:
         # Built eagerly even when first asked for inside a jit trace (run.py builds it from its
         # config there): the contact tables below need concrete values.
         with jax.ensure_compile_time_eval():
-            _CACHE[key] = _build(walls, n_agents, image, jitter)
+            _CACHE[key] = _build(walls, n_agents, image, jitter, camera, friction)
     return _CACHE[key]
 
 
-def _build(walls: str, n_agents: int, image: int, jitter: float) -> Arena:
+def _pair_friction(m: mujoco.MjModel, friction: str) -> np.ndarray:
+    """The friction of every <pair> [npair, 5] for `friction`.
+
+    Every contact of the scenes is an explicit <pair> (scenes/arena_room.xml), and a pair does
+    not take its geoms' friction: it has its own, MuJoCo's pair default (1, 1, 0.005, 1e-4,
+    1e-4) unless the XML sets one. "geoms": what MuJoCo gives a contact it generates itself
+    between the same two geoms (equal priorities: the element-wise max of their friction
+    vectors (sliding, torsional, rolling), sliding and rolling used for both tangent axes);
+    "unit": the pair default, the physics of sweeps made before this choice existed."""
+    if friction == "unit":
+        return np.broadcast_to(np.asarray(UNIT_PAIR_FRICTION), (m.npair, 5)).copy()
+    g1, g2 = m.pair_geom1, m.pair_geom2
+    if np.any(m.geom_priority[g1] != m.geom_priority[g2]):
+        raise NotImplementedError("geoms of different priority in a <pair>: "
+                                  "MuJoCo would take the higher one's friction")
+    mixed = np.maximum(m.geom_friction[g1], m.geom_friction[g2])  # [npair, 3]
+    return mixed[:, [0, 0, 1, 2, 2]]
+
+
+def _build(walls: str, n_agents: int, image: int, jitter: float, camera: str, friction: str) -> Arena:
     m = mujoco.MjModel.from_xml_path(str(scene_path(walls, n_agents)))
+    m.pair_friction[:] = _pair_friction(m, friction)
     name = lambda kind, n: mujoco.mj_name2id(m, kind, n)  # noqa: E731
     B, G, J = mujoco.mjtObj.mjOBJ_BODY, mujoco.mjtObj.mjOBJ_GEOM, mujoco.mjtObj.mjOBJ_JOINT
     agents = AGENT_NAMES[:n_agents]
@@ -288,7 +330,8 @@ def _build(walls: str, n_agents: int, image: int, jitter: float) -> Arena:
     agent_bodies = np.array([name(B, a) for a in agents])
     if not np.array_equal(agent_bodies, np.arange(m.nbody - n_agents, m.nbody)):
         raise RuntimeError(f"{scene_path(walls, n_agents)}: the agents must be the last bodies")
-    renderer = render_lib.Renderer(m, image=image, fovy=FOVY, agent_body_ids=tuple(agent_bodies))
+    source = AUTHORS_SOURCE if camera == "authors" else None
+    renderer = render_lib.Renderer(m, image=image, fovy=FOVY, agent_body_ids=tuple(agent_bodies), source=source)
     arena = Arena(
         walls=walls,
         n_agents=n_agents,
@@ -297,6 +340,9 @@ def _build(walls: str, n_agents: int, image: int, jitter: float) -> Arena:
         mj_model=m,
         model=model,
         fovy=FOVY,
+        camera=camera,
+        aspect=renderer.aspect,
+        friction=friction,
         agent_bodies=agent_bodies,
         agent_geoms=np.array([name(G, a) for a in agents]),
         object_geoms=np.array([name(G, o) for o in OBJECTS]),

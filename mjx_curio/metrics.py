@@ -42,7 +42,9 @@ class Metric:
 A = ("agents",)
 SCHEMA: dict[str, Metric] = {
     "curiosity": Metric("float32", A, "squared latent distance",
-                        "curiosity reward r = ||z_{t+1} - E[z_hat_{t+1}]||^2 (eq. 3), mean over the window's steps, per agent"),
+                        "curiosity reward r (eq. 3): squared error between z_{t+1} and E[z_hat_{t+1}], averaged "
+                        "(curiosity=mean) or summed (curiosity=sum) over the latent dimensions; mean over the "
+                        "window's steps, per agent"),
     "curiosity_sample": Metric("float32", A, "squared latent distance",
                                "curiosity reward at the window's last step (the paper's raw sample every 20 steps), per agent"),
     "predicted": Metric("float32", A, "squared latent distance",
@@ -58,7 +60,8 @@ SCHEMA: dict[str, Metric] = {
     "object_pos": Metric("float32", ("objects", "xyz"), "m", "position of each object's body origin at the window's end"),
     "steps_taken": Metric("int32", (), "steps", "steps the run actually took in the window (fewer once halted)"),
     "vae_loss": Metric("float32", (), "nats (summed over pixels and agents)",
-                       "VAE loss (eq. 5: reconstruction + beta * KL with free bits), mean over the window's updates"),
+                       "VAE loss (eq. 5: reconstruction + beta * KL, with free bits if kl_tolerance > 0), "
+                       "mean over the window's updates"),
     "recon": Metric("float32", (), "sum of squared pixel errors",
                     "VAE reconstruction error per image, summed over agents, mean over the window's updates"),
     "kl": Metric("float32", (), "nats", "VAE KL divergence, summed over agents, mean over updates"),

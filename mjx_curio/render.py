@@ -5,8 +5,21 @@ every agent's view is ray cast analytically against the scene's visible geoms:
 
 * `camera_poses(data, agent_body_ids)`: each agent's eye (0.2 above its body centre, i.e. on
   the top face of its cube) looking horizontally along its heading, as MuJoCo camera frames.
-* `Renderer(mj_model, image, fovy, agent_body_ids)(data) -> (rgb, geom_id)`: the images of
-  every agent of one world; `jit` and `vmap` it over worlds.
+* `Renderer(mj_model, image, fovy, agent_body_ids, source=...)(data) -> (rgb, geom_id)`: the
+  images of every agent of one world; `jit` and `vmap` it over worlds.
+
+The camera: a square image of `image` x `image` pixels at vertical field of view `fovy`.
+With `source=None` it is a square camera (the same field of view both ways, one ray through
+each pixel's centre). With `source=(width, height)` it is the camera the authors' code uses:
+render width x height (640 x 480: aspect 4:3, so about 106 degrees horizontally at fovy 90)
+and resize that to the square image by nearest-pixel sampling, which squeezes the view
+sideways. It is ray cast directly at the square size, never at 640 x 480: output pixel (i, j)
+casts the ray through the centre of the source pixel that nearest-pixel resizing keeps,
+column floor((j + 0.5) * width / image) and row floor((i + 0.5) * height / image) (the
+convention of PIL's and torch's "nearest-exact"; `source_pixels`). The authors' resize is
+torchvision's `Resize` (bilinear, antialiased on a PIL image), which blends the source pixels
+around each output pixel's centre; one ray per pixel keeps that geometry and leaves out the
+blur.
 
 Everything that does not change while the world moves (which geoms are drawn, their types,
 sizes, colours, textures, the convex hulls of meshes, the pixel rays in camera coordinates)
@@ -68,6 +81,7 @@ EYE_HEIGHT = 0.2  # eye above the agent body's centre: the top face of a 0.2 hal
 NEAR = 0.1
 FAR = 10.0
 _INVISIBLE_GROUP = 3  # geoms in this group or above are never drawn
+_OWN = object()  # `Renderer.view`'s default source: the renderer's own
 
 
 def camera_poses(data, agent_body_ids):
@@ -128,6 +142,9 @@ class Renderer:
       mj_model: the `mujoco.MjModel` the `mjx.Data` comes from.
       image: image side in pixels (images are square).
       fovy: vertical field of view in degrees.
+      source: None for a square camera; (width, height) for a camera of that aspect whose
+        width x height picture is resized to the square image by nearest-pixel sampling (the
+        authors' (640, 480)); see the module docstring.
       agent_body_ids: the bodies carrying a camera; default: the bodies named ``agent_*``.
         Each agent's view leaves out the geoms of its own body (its eye is on its own top face).
       near, far: clipping depths along the view axis; hits outside are ignored (far -> sky).
@@ -147,8 +164,10 @@ class Renderer:
         near: float = NEAR,
         far: float = FAR,
         sky_rgb=SKY_RGB,
+        source=None,
     ):
         m = mj_model
+        self.source = _check_source(source)
         if agent_body_ids is None:
             agent_body_ids = agent_bodies(m)
         self.agent_body_ids = tuple(int(b) for b in agent_body_ids)
@@ -178,13 +197,19 @@ class Renderer:
     def n_agents(self) -> int:
         return len(self.agent_body_ids)
 
+    @property
+    def aspect(self) -> float:
+        """Width / height of the agents' camera before it is squeezed into the square image."""
+        return 1.0 if self.source is None else self.source[0] / self.source[1]
+
     def __call__(self, data):
         """Render every agent's view of one world: (rgb uint8 [V,H,W,3], geom_id int32 [V,H,W])."""
         eye, cam = camera_poses(data, self.agent_body_ids)  # [V,3], [V,3,3]
         # The agent's own body is never seen from its own eye (which sits on its top face).
         return self.view(data, eye, cam, hidden=self._own)
 
-    def view(self, data, eye, cam, hidden=None, image: int | None = None, fovy: float | None = None):
+    def view(self, data, eye, cam, hidden=None, image: int | None = None, fovy: float | None = None,
+             source=_OWN):
         """Render one world from any cameras with this scene's geoms, textures and lights.
 
         Args:
@@ -194,11 +219,15 @@ class Renderer:
             camera looks along -z).
           hidden: optional bool numpy `[V, n_prims]`: primitives left out of each view.
           image, fovy: image side and vertical field of view (default: the renderer's).
+          source: None (a square camera) or the (width, height) squeezed into the image, as for
+            `Renderer` (default: the renderer's own; pass None for a map view such as
+            `overhead_camera`).
         Returns (rgb uint8 [V,H,W,3], geom_id int32 [V,H,W]); row 0 is the top of the image.
         """
         f32 = jnp.float32
         n = self.image if image is None else int(image)
-        X, Y, inv_dd = _pixel_rays(n, self.fovy if fovy is None else float(fovy))
+        source = self.source if source is _OWN else _check_source(source)
+        X, Y, inv_dd = _pixel_rays(n, self.fovy if fovy is None else float(fovy), source)
         eye = jnp.asarray(eye, f32).reshape(-1, 3)
         cam = jnp.asarray(cam, f32).reshape(-1, 3, 3)
         gpos = jnp.asarray(data.geom_xpos, f32)[self._gids]  # [P,3]
@@ -260,14 +289,42 @@ class Renderer:
         return np.asarray([[p.body in {int(b) for b in bodies} for p in self._prims] for bodies in bodies_per_view])
 
 
-def _pixel_rays(n: int, fovy: float):
-    """Pixel-centre rays of an n x n camera in camera coordinates (x right, y up, looking along
-    -z), ray r = row * n + column, row 0 on top: x [R], y [R] and 1/|d|^2 [R] (float32 numpy).
-    Aspect 1, so the horizontal half-extent equals the vertical one."""
+def _check_source(source):
+    if source is None:
+        return None
+    w, h = (int(v) for v in source)
+    if w < 1 or h < 1 or (w, h) != tuple(source):
+        raise ValueError(f"source={source!r} must be None or (width, height), two positive integers")
+    return (w, h)
+
+
+def source_pixels(n: int, size: int) -> np.ndarray:
+    """The source pixels [n] that nearest-pixel resizing of `size` pixels to `n` keeps: output
+    pixel k takes floor((k + 0.5) * size / n), the source pixel under its centre (PIL's NEAREST
+    and torch's "nearest-exact"). Integer arithmetic, so exact at any size."""
+    k = np.arange(n, dtype=np.int64)
+    return (2 * k + 1) * int(size) // (2 * int(n))
+
+
+def _pixel_rays(n: int, fovy: float, source=None):
+    """The rays of an n x n image in camera coordinates (x right, y up, looking along -z), ray
+    r = row * n + column, row 0 on top: x [R], y [R] and 1/|d|^2 [R] (float32 numpy).
+
+    source None: a square camera, one ray through each pixel's centre, the horizontal
+    half-extent equal to the vertical one. source (width, height): the rays through the centres
+    of the source pixels that nearest-pixel resizing of a width x height picture (horizontal
+    half-extent tan(fovy / 2) * width / height) to n x n keeps (`source_pixels`)."""
     half = math.tan(math.radians(fovy) / 2.0)
-    centres = (np.arange(n) + 0.5) / n * 2.0 - 1.0
-    x = np.tile(half * centres, n).astype(np.float32)
-    y = np.repeat(-half * centres, n).astype(np.float32)
+    if source is None:
+        cx = cy = (np.arange(n) + 0.5) / n * 2.0 - 1.0
+        half_x = half
+    else:
+        w, h = source
+        cx = (2.0 * source_pixels(n, w) + 1.0) / w - 1.0  # source pixel centres, -1 .. 1
+        cy = (2.0 * source_pixels(n, h) + 1.0) / h - 1.0
+        half_x = half * w / h
+    x = np.tile(half_x * cx, n).astype(np.float32)
+    y = np.repeat(-half * cy, n).astype(np.float32)
     # 1/|d|^2 of (x, y, -1): rotations keep |d|, so it is the same in every local frame.
     inv_dd = (1.0 / (x.astype(np.float64) ** 2 + y**2 + 1.0)).astype(np.float32)
     return x, y, inv_dd

@@ -5,32 +5,38 @@ curiosity with every agent's self-model, let each agent's policy pick, store the
 advance the shared MDN-RNN memory, step the arena with all actions at once, render every agent's
 view, encode it, and score curiosity (eq. 3) against the MDN-RNN's prediction. Every
 `update_every` steps `learn` trains the VAE, the MDN-RNN and every self-model from one replay
-sample (paper 3.2-3.3, FACTS.md). `run_chunk` is a `lax.scan` of these and returns the chunk's
+sample (paper 3.2-3.3). `run_chunk` is a `lax.scan` of these and returns the chunk's
 metrics already reduced to windows of `metrics_every` steps.
 
 A sweep is a `RunState` with a leading runs axis. `sweep_chunk` advances every run; how the runs
 axis is traversed is `RunConfig.runs_loop`:
 - "map": one run after another inside the compiled program (an in-place `fori_loop` over the
   runs axis). Every run then executes exactly the program of a run alone, so a run's results are
-  bit-identical alone, inside any sweep and on any number of devices. It is also the faster
+  bit-identical alone and inside any sweep on one device. It is also the faster
   choice on a CPU: vmapping convolutions whose kernels differ per run turns them into grouped
   convolutions, which XLA CPU runs slower (measured: 149 ms against 108 ms per learner update,
   `python -m mjx_curio.bench what=sweep`).
 - "vmap": all runs in lockstep, batched. What an accelerator wants; results agree with a run
   alone to float rounding (about 1e-6 after one update), so trajectories can part after many
   steps where an argmax flips.
-Across devices the runs axis is sharded with `shard_map` (sweep.py): each device advances its own
-runs, no communication, so sharding never changes a result.
+Across devices the runs axis is sharded with `shard_map` (program.py): each device advances its
+own runs, with no communication. A device holding k runs runs the program of a k-run sweep on
+one device, so its runs give the same numbers as that sweep's, bit for bit; against a sweep with
+another number of runs a device, XLA compiles another program whose float rounding may differ in
+the last bit (MJX's contact solver among others), and such differences grow along a chaotic run.
 
 Ordering within a step t (carry_t = LSTM state before step t, z_t = encoding of o_t):
     q_t = self-models(z_t, h_t); a_t = policy(q_t); replay <- (o_t, z_t, a_t, carry_t)
     carry_t+1, mix_t = MDN-RNN(carry_t, z_t, a_t); world_t+1 = arena.step(world_t, a_t)
-    o_t+1 = render(world_t+1); z_t+1 = encode(o_t+1); r_t = ||z_t+1 - E[mix_t]||^2
+    o_t+1 = render(world_t+1); z_t+1 = latent(o_t+1); r_t = ||z_t+1 - E[mix_t]||^2
+A frame's latent z is a sample of the VAE's posterior (or its mean, `LearnerConfig.z`) and the
+curiosity r the mean (or sum, `LearnerConfig.curiosity`) of the squared error over the latent
+dimensions. The sampling noise comes from the run's own key stream, so a run stays a pure
+function of its seed.
 """
 
 from __future__ import annotations
 
-import dataclasses
 import functools
 from typing import Any, NamedTuple
 
@@ -43,48 +49,9 @@ from mjx_curio import arena as arena_lib
 from mjx_curio import policies
 from mjx_curio import replay as replay_lib
 from mjx_curio import world_model as wm
-from mjx_curio.config import ConfigError, LearnerConfig, check_choice, check_float, check_int
+from mjx_curio.config import RUNS_LOOPS, ConfigError, RunConfig  # noqa: F401  (RunConfig: part of this module's API)
 
-RUNS_LOOPS = ("map", "vmap")
 N_VIEW = len(arena_lib.OBJECTS) + 1  # view fractions: the four objects, then the other agent
-
-
-@dataclasses.dataclass(frozen=True)
-class RunConfig:
-    """Everything that fixes the shapes and the program of a run. Identical for every run of a
-    sweep; what varies between runs (seed, policy and its settings) lives in `RunState`."""
-
-    walls: str = "same"
-    n_agents: int = 2
-    image: int = 64
-    jitter: float = 0.0  # objects start up to this many metres from the paper's layout
-    buffer: int = 10_000  # replay capacity, in agent steps (FACTS.md)
-    update_every: int = 4  # agent steps per learner update (paper, section 5)
-    metrics_every: int = 20  # steps per metrics window (the paper samples every 20 steps)
-    runs_loop: str = "map"
-    learner: LearnerConfig = LearnerConfig()
-
-    def __post_init__(self):
-        arena_lib.validate(self.walls, self.n_agents, self.image)
-        check_float("jitter", self.jitter, 0.0, arena_lib.MAX_JITTER)
-        check_int("update_every", self.update_every, 1)
-        check_int("metrics_every", self.metrics_every, 1)
-        check_choice("runs_loop", self.runs_loop, RUNS_LOOPS)
-        if self.metrics_every % self.update_every:
-            raise ConfigError(
-                f"metrics_every={self.metrics_every} must be a multiple of update_every={self.update_every}, "
-                "so every metrics window holds whole learner updates"
-            )
-        if self.learner.image != self.image or self.learner.n_agents != self.n_agents:
-            raise ConfigError(
-                f"learner.image/n_agents ({self.learner.image}, {self.learner.n_agents}) must equal "
-                f"image/n_agents ({self.image}, {self.n_agents})"
-            )
-        check_int("buffer", self.buffer, self.learner.seq_len + 2)
-
-    @property
-    def arena(self) -> arena_lib.Arena:
-        return arena_lib.make(self.walls, self.n_agents, self.image, self.jitter)
 
 
 class RunState(NamedTuple):
@@ -93,7 +60,7 @@ class RunState(NamedTuple):
     replay: replay_lib.Replay
     carry: tuple  # (c, h) LSTM state before the current step, each [rnn_hidden]
     frames: jax.Array  # uint8 [n_agents, H, W, 3], the current observation o_t
-    z: jax.Array  # f32 [n_agents, latent], its encoding (posterior mean)
+    z: jax.Array  # f32 [n_agents, latent], its latent (a posterior sample or the mean: LearnerConfig.z)
     counts: jax.Array  # int32 [n_agents, n_actions], UCB's N(a)
     key: jax.Array  # uint32 [2], this run's random stream
     step: jax.Array  # int32, agent steps taken
@@ -109,11 +76,13 @@ def init_run(cfg: RunConfig, key: jax.Array, policy: policies.PolicyParams) -> R
     """A run at step 0: the arena reset, fresh networks, the first views rendered and encoded.
     `key` (a raw uint32[2] PRNG key) alone decides everything random in the run."""
     arena = cfg.arena
-    k_env, k_learn, k_run = jax.random.split(key, 3)
+    # k_z: the first views' latent noise. Splits are prefix-stable (JAX's default threefry), so
+    # the other three keys are those of the three-way split used before k_z existed.
+    k_env, k_learn, k_run, k_z = jax.random.split(key, 4)
     env = arena.reset(k_env)
     learner = wm.init_learner(cfg.learner, k_learn)
     frames, _ = arena.render(env)
-    z, _ = wm.encode(cfg.learner, learner.vae, frames)
+    z = wm.latent(cfg.learner, learner.vae, frames, k_z)
     lc = cfg.learner
     return RunState(
         env=env,
@@ -138,15 +107,15 @@ def act(cfg: RunConfig, s: RunState) -> tuple[RunState, dict]:
     untouched (`replay.add(..., enabled=False)`); its metrics are masked by `reduce_windows`."""
     arena, lc = cfg.arena, cfg.learner
     go = ~s.halted
-    k_policy, k_next = jax.random.split(s.key)
+    k_policy, k_next, k_z = jax.random.split(s.key, 3)  # prefix-stable: k_policy, k_next as before k_z
     q = wm.predict_curiosity(lc, s.learner.self_model, s.z, s.carry[1])  # [n, A]
     a = policies.select_agents(s.policy, q, k_policy, s.counts, s.step)
     replay = replay_lib.add(s.replay, replay_lib.Transition(s.frames, s.z, a, s.carry), enabled=go)
     carry, mix = wm.rnn_step(lc, s.learner.rnn, s.carry, s.z, a)
     env = arena.step(s.env, a)
     frames, geom_id = arena.render(env)
-    z, _ = wm.encode(lc, s.learner.vae, frames)
-    reward = wm.curiosity(z, mix)  # [n]
+    z = wm.latent(lc, s.learner.vae, frames, k_z)  # the next step's input and this step's target
+    reward = wm.curiosity(lc, z, mix)  # [n]
     xy, yaw = arena.agent_pose(env)
     metrics = {
         "curiosity": reward,
@@ -183,7 +152,7 @@ def learn(cfg: RunConfig, s: RunState) -> tuple[RunState, dict]:
     A non-finite loss halts the run: the update is discarded and the run stays frozen at its
     last good state from then on (checkpoints keep that state)."""
     lc = cfg.learner
-    k_sample, k_update, k_next = jax.random.split(s.key, 3)
+    k_sample, k_update, k_next, k_z = jax.random.split(s.key, 4)  # prefix-stable, as in act
 
     def update(s):
         batch = replay_lib.sample(s.replay, k_sample, lc.batch, lc.seq_len)
@@ -192,7 +161,7 @@ def learn(cfg: RunConfig, s: RunState) -> tuple[RunState, dict]:
         learner = jax.tree.map(lambda new, old: jnp.where(finite, new, old), learner, s.learner)
         # The current view's latent in the updated VAE's space, so the next step's replay entry,
         # memory input and curiosity all use one encoder.
-        z = jnp.where(finite, wm.encode(lc, learner.vae, s.frames)[0], s.z)
+        z = jnp.where(finite, wm.latent(lc, learner.vae, s.frames, k_z), s.z)
         m = {k: jnp.where(finite, v, jnp.nan) for k, v in m.items()}
         m["updated"] = finite.astype(jnp.int32)
         m["non_finite"] = (~finite).astype(jnp.int32)

@@ -171,7 +171,8 @@ def programs(cfg, top: int):
         out = {"frames": s.frames, "curiosity": m["curiosity"], "actions": m["action"], "pose": m["agent_pose"],
                "steps": s.step}
         if top:
-            rgb, _ = arena.renderer.view(s.env.data, cam_pos, cam_xmat, image=top, fovy=render.OVERHEAD_FOVY)
+            rgb, _ = arena.renderer.view(s.env.data, cam_pos, cam_xmat, image=top, fovy=render.OVERHEAD_FOVY,
+                                         source=None)  # a square map view, whatever the agents' camera
             out["top"] = rgb[0]
         return s, out
 

@@ -6,13 +6,13 @@ first argument and is static under `jax.jit` (`jax.jit(learner_update, static_ar
 Acting loop, one step t, as the run loop is expected to use these pieces
 (carry_t = (c, h) is the LSTM state *before* it has seen step t):
 
-    mu, logvar = encode(cfg, state.vae, frames_t)              # z_t = mu  [n_agents, Z]
+    z_t        = latent(cfg, state.vae, frames_t, key)            # [n_agents, Z], see cfg.z
     q          = predict_curiosity(cfg, state.self_model, z_t, carry_t[1])   # [n_agents, 7]
     a_t        = policies.select_agents(...)                      # [n_agents]
     buffer     = replay.add(buffer, Transition(frames_t, z_t, a_t, carry_t))
     carry_t+1, mix_t = rnn_step(cfg, state.rnn, carry_t, z_t, a_t)
-    ... physics, render, encode -> z_t+1
-    r_t        = curiosity(z_t+1, mix_t)                          # [n_agents], eq. 3
+    ... physics, render, latent -> z_t+1
+    r_t        = curiosity(cfg, z_t+1, mix_t)                     # [n_agents], eq. 3
 
 The self-model sees (z_t, h_t) with h_t the hidden state before step t, because it must
 score every candidate action before one is chosen (the LSTM output after step t depends
@@ -168,7 +168,17 @@ def decode(cfg: LearnerConfig, vae_params, z):
 
 
 def sample_latent(key, mu, logvar):
+    """z ~ N(mu, exp(logvar)), reparameterised: mu + sigma * eps with eps ~ N(0, I) from `key`."""
     return mu + jnp.exp(0.5 * logvar) * jax.random.normal(key, mu.shape, mu.dtype)
+
+
+def latent(cfg: LearnerConfig, vae_params, frames, key):
+    """The latent of frames uint8 [..., H, W, 3] as the acting loop and the memory use it,
+    [..., latent]: a reparameterised sample of the posterior q(z|o) = N(mu, sigma^2) drawn
+    with `key` (cfg.z == "sample", the paper's z ~ q(z|o) and the authors' code), or its mean
+    mu (cfg.z == "mean"; `key` unused)."""
+    mu, logvar = encode(cfg, vae_params, frames)
+    return sample_latent(key, mu, logvar) if cfg.z == "sample" else mu
 
 
 def rnn_step(cfg: LearnerConfig, rnn_params, carry: Carry, z, a):
@@ -226,16 +236,20 @@ def mdn_nll(mix: Mixture, z_next):
     return -jnp.sum(mixture_log_prob(mix, z_next), axis=-1)
 
 
-def curiosity(z_next, mix: Mixture):
-    """Eq. 3 per agent: ||z_{t+1} - E[z_hat_{t+1}]||^2, shape [..., n_agents]."""
-    return jnp.sum(jnp.square(z_next - mixture_mean(mix)), axis=-1)
+def curiosity(cfg: LearnerConfig, z_next, mix: Mixture):
+    """Eq. 3 per agent: the squared error between z_{t+1} and the MDN-RNN's expectation
+    E[z_hat_{t+1}], shape [..., n_agents]: its mean over the latent dimensions (cfg.curiosity ==
+    "mean", the authors' code: `mse_loss(...).mean(dim=1)`) or their sum, ||.||^2 ("sum")."""
+    sq = jnp.square(z_next - mixture_mean(mix))
+    return jnp.mean(sq, axis=-1) if cfg.curiosity == "mean" else jnp.sum(sq, axis=-1)
 
 
 def vae_loss(cfg: LearnerConfig, vae_params, frames, key):
     """Eq. 1/5 on frames uint8 [B, n_agents, H, W, 3]: summed over agents, mean over B.
 
-    Reconstruction is the per-image sum of squared errors and KL is weighted by beta with
-    Ha & Schmidhuber's free bits (floor kl_tolerance * latent nats per image).
+    Reconstruction is the per-image sum of squared errors and KL is weighted by beta; with
+    kl_tolerance > 0 the KL term has Ha & Schmidhuber's free bits (a floor of
+    kl_tolerance * latent nats per image; the default 0 is the paper's plain KL).
     Returns (loss, (recon, kl)) with recon and kl on the same scale (agents summed).
     """
     b, n = frames.shape[:2]
@@ -286,13 +300,18 @@ def learner_update(cfg: LearnerConfig, state: LearnerState, batch: Batch, key):
       images, so its cost does not grow with seq_len.
     - MDN-RNN: truncated BPTT over the seq_len transitions of each sequence, starting
       from the LSTM carry stored in replay at the sequence start; inputs are the stored
-      latents (cfg.latents == "stored") or the frames re-encoded by the current VAE.
+      latents (cfg.latents == "stored") or the frames re-encoded by the current VAE
+      ("reencode": `latent` of every frame; with cfg.z == "sample" a posterior sample whose
+      noise is drawn with `jax.random.split(key, 3)[2]`).
     - Self-models: targets = curiosity of the sampled transitions under the current
       MDN-RNN (stop-gradient), inputs (z_t^i, h_t), trained on the actions actually taken.
     Returns (new state, metrics dict: scalars, and `self_loss_agents` [n_agents]).
     """
     opt = optimizer(cfg)
-    k_frame, k_vae = jax.random.split(key)
+    # k_z: the re-encoding noise (latents="reencode", z="sample"). JAX's threefry splits are
+    # prefix-stable (jax_threefry_partitionable, the default), so k_frame and k_vae are the keys
+    # of the two-way split used before k_z existed, and old settings reproduce their runs.
+    k_frame, k_vae, k_z = jax.random.split(key, 3)
     b, tp1 = batch.actions.shape[:2]
 
     # --- VAE -----------------------------------------------------------------------------
@@ -304,7 +323,7 @@ def learner_update(cfg: LearnerConfig, state: LearnerState, batch: Batch, key):
 
     # --- MDN-RNN ---------------------------------------------------------------------------
     if cfg.latents == "reencode":
-        z = jax.lax.stop_gradient(encode(cfg, state.vae, batch.frames)[0])
+        z = jax.lax.stop_gradient(latent(cfg, state.vae, batch.frames, k_z))
     else:
         z = batch.latents
     carry0 = jax.tree.map(lambda x: x[:, 0], batch.carry)
@@ -314,7 +333,7 @@ def learner_update(cfg: LearnerConfig, state: LearnerState, batch: Batch, key):
 
     # --- self-models ---------------------------------------------------------------------
     mix = jax.lax.stop_gradient(mix)
-    cur = curiosity(z[:, 1:], mix)  # [B, T, n]
+    cur = curiosity(cfg, z[:, 1:], mix)  # [B, T, n]: the self-models' targets, on cfg.curiosity's scale
     n_tr = b * (tp1 - 1)
     z_in = z[:, :-1].reshape(n_tr, cfg.n_agents, cfg.latent)
     h_in = jax.lax.stop_gradient(h_in).reshape(n_tr, cfg.rnn_hidden)

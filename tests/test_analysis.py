@@ -82,6 +82,31 @@ def test_configs_from_manifest(sweep):
                                           ucb_c=tuple(sweep.manifest["config"]["ucb_c"])))
 
 
+def test_configs_from_a_manifest_older_than_the_fidelity_knobs():
+    """A sweep made before the knobs `curiosity`, `z` (LearnerConfig), `camera` and `friction`
+    (RunConfig) existed has none of them in its manifest: it loads as what it ran, each knob's
+    `legacy` value (sum, mean, square, unit), not today's defaults; its recorded kl_tolerance
+    (0.5, the default then) is kept; a manifest that records them loads them."""
+    import dataclasses
+
+    from mjx_curio.config import LearnerConfig, RunConfig
+
+    cfg = RunConfig(image=16, learner=LearnerConfig(image=16, latent=8, vae_channels=(8, 8, 8, 8)))
+    recorded = json.loads(json.dumps(dataclasses.asdict(cfg)))
+    assert an.run_config({"run_config": recorded}) == cfg
+    old = json.loads(json.dumps(recorded))
+    for k in ("camera", "friction"):
+        del old[k]
+    for k in ("curiosity", "z"):
+        del old["learner"][k]
+    old["learner"]["kl_tolerance"] = 0.5
+    got = an.run_config({"run_config": old})
+    assert (got.camera, got.friction, got.learner.curiosity, got.learner.z) == ("square", "unit", "sum", "mean")
+    assert got.learner.kl_tolerance == 0.5 and got.learner.latent == 8 and got.learner.vae_channels == (8, 8, 8, 8)
+    assert an.learner_config({"run_config": old}) == got.learner
+    assert (cfg.camera, cfg.friction, cfg.learner.curiosity, cfg.learner.z) == ("authors", "geoms", "mean", "sample")
+
+
 def test_find_sweeps(tiny_sweeps_dir, tiny_sweep):
     assert an.find_sweeps(tiny_sweep) == [tiny_sweep]
     sweeps = an.load_sweeps(tiny_sweeps_dir)

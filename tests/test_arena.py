@@ -1,9 +1,9 @@
 """Behaviour of the arena (mjx_curio/arena.py), measured through its public API.
 
 What each action does to an agent, both agents acting in one step, the sphere rolling, the
-cylinder toppling and rolling, nothing escaping the room in a long random rollout, the contact
-flags (against hand-placed states and against MuJoCo's C collision code), reset's layout and
-jitter, and the input checks.
+cylinder toppling and rolling, objects sliding to rest under the geoms' friction, nothing escaping
+the room in a long random rollout, the contact flags (against hand-placed states and against
+MuJoCo's C collision code), reset's layout and jitter, and the input checks.
 
 Compiling MJX is the cost here (tens of seconds per function on a 2-core CPU), so the whole
 module shares three compiled functions: one 2-agent arena's `reset` and `step` (every hand-built
@@ -276,6 +276,125 @@ def _push(arena, state, name, force, arm_local=(0.0, 0.0, 0.0)):
     return state.replace(data=state.data.replace(xfrc_applied=jnp.asarray(x)))
 
 
+G = 9.8
+
+
+def _slide(advance, velocity, v0, steps=60):
+    """Horizontal speed [steps + 1] and vertical velocity [steps + 1] of an object whose
+    horizontal velocity `advance(v0)` set to v0 (and returned the state), then stepped `steps`
+    times by `advance(None)`; `velocity()` reads the object's linear velocity (world)."""
+    advance(v0)
+    vs = [velocity()]
+    for _ in range(steps):
+        advance(None)
+        vs.append(velocity())
+    v = np.asarray(vs, np.float64)
+    return np.linalg.norm(v[:, :2], axis=1), v[:, 2]
+
+
+def _friction_measures(speed, vz, v0):
+    """(mu while touching, mean deceleration over the slide) of a slide from `_slide`.
+
+    Sliding contacts in MuJoCo's convex contact model separate (the disc leaves the floor at
+    about mu times its sliding speed and lands again: at 1/60 s a step the soft contact is
+    nearly hard), so the object slides in hops. Two measures that hold regardless: on every
+    step it touches the floor and is still sliding after, the speed it loses over the normal
+    velocity it gains (plus gravity's) is mu, Coulomb's law; and from the push to rest the
+    normal impulses add up to gravity's, so it stops after v0 / (mu g): the mean deceleration."""
+    dt = 1.0 / 60.0
+    lost = speed[:-1] - speed[1:]
+    normal = (vz[1:] - vz[:-1]) + G * dt  # normal impulse / mass of each step
+    sliding = speed[1:] > 0.01 * v0
+    touching = sliding & (normal > 1e-3)
+    mu = np.sum(lost[touching]) / np.sum(normal[touching])
+    t_stop = (np.flatnonzero(sliding)[-1] + 1) * dt
+    return mu, v0 / t_stop
+
+
+def test_pushed_objects_slide_to_rest_at_the_geoms_friction(arena, start):
+    """friction="geoms" (the default): every contact pair has what MuJoCo gives a contact of its
+    two geoms, sliding 0.6 (scenes/arena_defaults.xml). Measured in MJX through the arena's own
+    step: the disc, set sliding at 2 and 3 m/s and released, loses speed at 0.6 times its
+    normal impulse while on the floor and decelerates on average at 0.6 g (to 10%; measured
+    1.02 mu g); the pyramid (its lower box on the floor) on average at 0.6 g too (measured
+    0.94-0.97 mu g; it rocks, so only its mean is judged)."""
+    m = arena.mj_model
+    floor = mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_GEOM, "floor")
+    mu = float(m.geom_friction[floor, 0])
+    assert arena.friction == "geoms" and mu == 0.6
+    s = place(arena, start, {0: PARK, 1: (-3.2, 3.2, 0.0)})  # agents in corners, out of the way
+    for _ in range(30):  # settle onto the soft floor
+        s = step(arena, s, [STOP, STOP])
+    settled = s
+    decel = {"disc": [], "pyramid": []}
+    for v0 in (2.0, 3.0):
+        for name, direction in (("disc", 0), ("pyramid", 1)):  # the disc along +x, the pyramid -y
+            dof = m.jnt_dofadr[mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_JOINT, name)]
+            box = {}
+
+            def advance(v, name=name, dof=dof, direction=direction, box=box):
+                if v is not None:
+                    q = np.array(settled.data.qvel)
+                    q[dof + direction] = v if name == "disc" else -v
+                    box["s"] = settled.replace(data=settled.data.replace(qvel=jnp.asarray(q, settled.data.qvel.dtype)))
+                else:
+                    box["s"] = step(arena, box["s"], [STOP, STOP])
+
+            speed, vz = _slide(advance, lambda name=name, box=box: obj_vel(arena, box["s"], name)[0], v0)
+            mu_touch, mean_decel = _friction_measures(speed, vz, v0)
+            print(f"{name} from {v0} m/s: mu while touching {mu_touch:.3f}, mean deceleration "
+                  f"{mean_decel:.2f} m/s^2 = {mean_decel / (mu * G):.3f} mu g")
+            if name == "disc":
+                assert abs(mu_touch - mu) < 0.1 * mu, (v0, mu_touch)
+                assert abs(mean_decel - mu * G) < 0.1 * mu * G, (v0, mean_decel)
+            decel[name].append((v0, mean_decel))
+    v0s, a = np.asarray(decel["pyramid"]).T
+    pyramid = v0s.sum() / (v0s / a).sum()  # total speed lost over total sliding time
+    assert abs(pyramid - mu * G) < 0.1 * mu * G, decel["pyramid"]
+
+
+def test_pair_friction_follows_the_friction_knob():
+    """Every contact is an explicit <pair>. friction="geoms": each pair's friction is MuJoCo's
+    mix of its two geoms' (element-wise max: sliding, sliding, torsional, rolling, rolling),
+    the same as the scene XML gives it (scenes/arena_defaults.xml), in the MuJoCo model and the
+    MJX model; friction="unit": MuJoCo's pair default (sliding 1.0), which sweeps made before
+    the knob ran with, and which really is the friction then: in MuJoCo's C engine, the disc
+    sliding on the floor loses speed at 1.0 times its normal impulse (0.6 with "geoms")."""
+    for walls, n in (("same", 1), ("different", 2)):
+        raw = mujoco.MjModel.from_xml_path(str(arena_lib.scene_path(walls, n)))
+        g1, g2 = raw.pair_geom1, raw.pair_geom2
+        mixed = np.maximum(raw.geom_friction[g1], raw.geom_friction[g2])[:, [0, 0, 1, 2, 2]]
+        np.testing.assert_allclose(raw.pair_friction, mixed, rtol=1e-6)  # the XML itself
+        geoms = arena_lib.make(walls, n_agents=n, image=8, friction="geoms")
+        unit = arena_lib.make(walls, n_agents=n, image=8, friction="unit")
+        assert raw.npair == geoms.mj_model.npair == (42 if n == 1 else 52)
+        np.testing.assert_allclose(geoms.mj_model.pair_friction, mixed, rtol=1e-6)
+        np.testing.assert_allclose(np.asarray(geoms.model.pair_friction), mixed, rtol=1e-6)
+        np.testing.assert_allclose(unit.mj_model.pair_friction, [[1.0, 1.0, 0.005, 1e-4, 1e-4]] * raw.npair)
+        np.testing.assert_allclose(np.asarray(unit.model.pair_friction), unit.mj_model.pair_friction, rtol=1e-6)
+    assert geoms is not unit and arena_lib.make(walls, n_agents=n, image=8) is geoms  # "geoms" is the default
+
+    for a, mu in ((unit, 1.0), (geoms, 0.6)):  # C MuJoCo: cheap, and the same model
+        mm = a.mj_model
+        d = mujoco.MjData(mm)
+        d.qpos[:] = a.qpos0
+        for i, xy in enumerate([(3.2, -3.2), (-3.2, 3.2)]):
+            d.qpos[a.qpos_xy[i]] = np.asarray(xy) - mm.body_pos[a.agent_bodies[i], :2]
+        for _ in range(30):
+            mujoco.mj_step(mm, d)
+        dof = mm.jnt_dofadr[mujoco.mj_name2id(mm, mujoco.mjtObj.mjOBJ_JOINT, "disc")]
+
+        def advance(v, mm=mm, d=d, dof=dof):
+            if v is not None:
+                d.qvel[dof] = v
+            else:
+                mujoco.mj_step(mm, d)
+
+        speed, vz = _slide(advance, lambda d=d, dof=dof: d.qvel[dof : dof + 3].copy(), 2.0)
+        mu_touch, _ = _friction_measures(speed, vz, 2.0)
+        assert abs(mu_touch - mu) < 0.1 * mu, (a.friction, mu_touch)
+
+
 def test_cylinder_pushed_high_topples_then_rolls(arena, start):
     park = {0: (-3.2, 3.2, 0.0), 1: PARK}
     s = place(arena, start, park)
@@ -422,19 +541,28 @@ def test_rollout_has_no_nan_and_nothing_leaves_the_room(rollout):
     q = rec["qpos"]  # [worlds, steps, nq]
     # Soft contacts: with a 1/60 s step MuJoCo stiffens a contact no further than a time
     # constant of 2 steps, so bodies sink in. Measured here: objects at rest ~1 cm into the
-    # floor, up to 5.5 cm for a moment when the pyramid lands after a push, agents up to
-    # 1.7 cm into a wall. Falling through would be tens of cm.
-    tol, floor_tol = 0.05, 0.08
+    # floor, agents up to 1.7 cm into a wall. For single steps deeper: when an agent strikes the
+    # disc's rim or the pyramid's base, the blow tilts the object about its centre within one
+    # step (the disc by 9 degrees), pushing its far edge 10-11 cm into the floor before the floor
+    # throws it up again (friction 0.6; with 1.0 these trajectories went 5.5 cm deep at most).
+    # Falling through would keep an object down for many steps: at most 0.1% of the steps may
+    # be more than 5 cm in (measured: 5 of 12,000 for the disc, 2 for the pyramid).
+    tol, floor_tol = 0.05, 0.13
     agents = q[..., arena.qpos_xy] + m.body_pos[arena.agent_bodies, :2]  # [w, t, n, 2]
     assert np.abs(agents).max() < WALL - 0.2 + tol, f"an agent's centre reached {np.abs(agents).max():.3f}"
     lowest = {}
     for k, name in enumerate(OBJECTS):
         a = arena.object_qpos[k]
         pos, quat = q[..., a : a + 3].reshape(-1, 3), q[..., a + 3 : a + 7].reshape(-1, 4)
-        assert np.abs(pos[:, :2]).max() < WALL, f"{name} left the room: |xy| up to {np.abs(pos[:, :2]).max():.3f}"
+        # `tol` past the wall's face: the pyramid's origin is the centre of its base, which
+        # lies on the wall when the pyramid has toppled base first against it (measured: 3.9 cm
+        # into the west wall, friction 0.6).
+        assert np.abs(pos[:, :2]).max() < WALL + tol, f"{name} left the room: |xy| up to {np.abs(pos[:, :2]).max():.3f}"
         if name == "sphere":
             assert np.abs(pos[:, :2]).max() < WALL - RADIUS["sphere"] + tol
-        lowest[name] = float(np.min(_lowest_collision_point(m, name, pos, quat)))
+        low = _lowest_collision_point(m, name, pos, quat)
+        lowest[name] = float(np.min(low))
+        assert np.mean(low < -0.05) < 1e-3, f"{name} more than 5 cm into the floor on {np.sum(low < -0.05)} steps"
     assert min(lowest.values()) > -floor_tol, f"lowest point of each object: {lowest}"
     # It was a real workout: the agents met objects, walls and each other.
     touches = rec["touch"].sum(axis=(0, 1))  # [agents, objects]
@@ -540,7 +668,15 @@ def test_contact_flags_agree_with_mujoco_c_collisions(rollout):
     )
     print(msg)
     assert pos.sum() >= 200, "too few contacts in the rollout to compare: " + msg
-    assert agree[pos].mean() >= 0.99 and agree.mean() >= 0.999, msg
+    # MJX's box-capsule function misses some overlaps of an agent's cube corner with the side of
+    # the standing cylinder's capsule (measured with friction 0.6: 9 of 460 touching entries,
+    # C overlaps of 0.2 mm to 2.4 cm that MJX reports no contact for; with friction 1.0 the
+    # trajectories never met one). Those, and only those, are allowed: any other disagreement
+    # fails, and they must stay rare.
+    wrong = np.argwhere(clear & (got != want))
+    cylinder = {i * k_obj + OBJECTS.index("cylinder") for i in range(n)}
+    assert all(col in cylinder and want[row, col] and not got[row, col] for row, col in wrong), msg
+    assert agree[pos].mean() >= 0.97 and agree.mean() >= 0.999, msg
     # touch_agent is symmetric: two agents touch each other or neither does.
     assert np.array_equal(rec["touch_agent"][..., 0], rec["touch_agent"][..., 1])
 
@@ -571,6 +707,8 @@ def test_reset_without_jitter_is_the_papers_layout(arena, start):
         (dict(jitter=-0.1), "jitter", ["0.0", "0.4"]),
         (dict(jitter=0.5), "jitter", ["0.0", "0.4"]),
         (dict(jitter=float("nan")), "jitter", ["0.0", "0.4"]),
+        (dict(camera="wide"), "camera", ["'authors'", "'square'"]),
+        (dict(friction="ice"), "friction", ["'geoms'", "'unit'"]),
     ],
 )
 def test_bad_input_fails_with_a_clear_config_error(kwargs, name, allowed):
@@ -580,3 +718,17 @@ def test_bad_input_fails_with_a_clear_config_error(kwargs, name, allowed):
     assert text.startswith(f"{name}="), text
     for word in allowed:
         assert word in text, f"{word!r} missing from: {text}"
+
+
+@pytest.mark.parametrize("kwargs,name,allowed", [(dict(camera="wide"), "camera", ["'authors'", "'square'"]),
+                                                  (dict(friction="ice"), "friction", ["'geoms'", "'unit'"])])
+def test_run_config_rejects_a_bad_camera_or_friction(kwargs, name, allowed):
+    from mjx_curio.config import RunConfig
+
+    with pytest.raises(ConfigError) as err:
+        RunConfig(**kwargs)
+    text = str(err.value)
+    assert text.startswith(f"{name}="), text
+    for word in allowed:
+        assert word in text, f"{word!r} missing from: {text}"
+    assert (RunConfig().camera, RunConfig().friction) == ("authors", "geoms")

@@ -5,6 +5,8 @@
 2. The overhead camera looks straight down: every object at its start position shows at the pixel
    where `project_overhead` puts it, the room's centre is floor, and the agents are seen from
    above (their cube tops).
+3. A renderer of the authors' camera (640 x 480 squeezed into the square image) renders its agents
+   squeezed, and `view(..., source=None)` (video.py's map view) is the square camera's.
 
 Plain `mujoco.MjData` states (no MJX compile): the renderer reads only poses.
 """
@@ -68,3 +70,37 @@ def test_overhead_view(world):
     seen = {gname(g) for g in np.unique(gid) if g >= 0}
     assert {"wall_north", "wall_east", "wall_south", "wall_west", "floor"} <= seen
     assert rgb.std() > 10
+
+
+def test_authors_camera_renderer_and_square_views(world):
+    """The agents' views of an authors'-camera renderer (source=(640, 480)) are its own rays, not
+    a square camera's; `view` with source=None from the same renderer, as video.py draws its
+    top-down map, is exactly a square renderer's view; and the arena builds its renderer from
+    its `camera` (authors by default, aspect 4/3; square: aspect 1)."""
+    from mjx_curio import arena as arena_lib
+
+    m, _, arrays = world
+    authors = render.Renderer(m, image=16, source=(640, 480))
+    square = render.Renderer(m, image=16)
+    pos, xmat = render.overhead_camera()
+    hide = authors.hide_bodies([(b,) for b in authors.agent_body_ids])
+
+    @jax.jit
+    def views(a):  # one program for all of them
+        d = _data(a)
+        eye, cam = render.camera_poses(d, authors.agent_body_ids)
+        return (authors(d), square(d), authors.view(d, eye, cam, hidden=hide),
+                authors.view(d, pos, xmat, image=24, fovy=render.OVERHEAD_FOVY, source=None),
+                square.view(d, pos, xmat, image=24, fovy=render.OVERHEAD_FOVY))
+
+    own_a, own_s, view_a, top_a, top_s = jax.tree.map(np.asarray, views(arrays))
+    assert not np.array_equal(own_a[1], own_s[1])  # the squeeze shows
+    for x, y in zip(top_a, top_s):  # the map view is square whatever the agents' camera
+        np.testing.assert_array_equal(x, y)
+    for x, y in zip(view_a, own_a):  # by default `view` is the renderer's own camera
+        np.testing.assert_array_equal(x, y)
+
+    a = arena_lib.make("same", n_agents=2, image=8)
+    assert (a.camera, a.aspect, a.fovy, a.renderer.source) == ("authors", 4 / 3, 90.0, (640, 480))
+    b = arena_lib.make("same", n_agents=2, image=8, camera="square")
+    assert (b.camera, b.aspect, b.renderer.source) == ("square", 1.0, None)

@@ -2,6 +2,7 @@
 
 import mjx_curio  # noqa: F401  (XLA flags before JAX initialises)
 
+import dataclasses
 import functools
 
 import jax
@@ -35,12 +36,17 @@ def test_mixture_mean_nll_and_curiosity_match_numpy():
     mean_np = np.sum(pi * mu, -1)
     cur_np = np.sum((z - mean_np) ** 2, -1)
 
-    f = jax.jit(lambda m, z: (wm.mdn_nll(m, z), wm.mixture_mean(m), wm.curiosity(z, m)))
-    nll, mean, cur = f(mix, jnp.asarray(z, jnp.float32))
-    assert nll.shape == (5,) and mean.shape == (5, 2, 3) and cur.shape == (5, 2)
+    summed, averaged = (LearnerConfig(latent=3, curiosity=c) for c in ("sum", "mean"))
+    f = jax.jit(lambda m, z: (wm.mdn_nll(m, z), wm.mixture_mean(m), wm.curiosity(summed, z, m),
+                              wm.curiosity(averaged, z, m)))
+    nll, mean, cur, cur_mean = f(mix, jnp.asarray(z, jnp.float32))
+    assert nll.shape == (5,) and mean.shape == (5, 2, 3) and cur.shape == cur_mean.shape == (5, 2)
     np.testing.assert_allclose(nll, nll_np, rtol=1e-4, atol=1e-4)
     np.testing.assert_allclose(mean, mean_np, rtol=1e-5, atol=1e-5)
     np.testing.assert_allclose(cur, cur_np, rtol=1e-4, atol=1e-5)
+    # curiosity="mean" (the authors' code: mean over the latent dimensions) is the sum / latent
+    np.testing.assert_allclose(cur_mean, cur_np / 3, rtol=1e-4, atol=1e-5)
+    np.testing.assert_allclose(cur_mean, np.asarray(cur) / 3, rtol=1e-6)
 
 
 # ----------------------------------------------------------------------------------------
@@ -92,7 +98,7 @@ def mdn_fns():
     @jax.jit
     def evaluate(p, z, a):
         nll, (mix, _) = seq_loss(p, z, a)
-        return nll, jnp.mean(wm.curiosity(z[:, 1:], mix))
+        return nll, jnp.mean(wm.curiosity(dataclasses.replace(cfg, curiosity="sum"), z[:, 1:], mix))
 
     return train, evaluate
 
@@ -301,18 +307,70 @@ def test_learner_update_starts_bptt_from_the_stored_carry(update):
     assert abs(float(m_first["nll"]) - float(m["nll"])) > 1e-3
 
 
-def test_reencode_mode_trains_the_mdn_on_fresh_encodings():
-    cfg = SMALL.__class__(**{**SMALL.__dict__, "latents": "reencode"})
+@pytest.mark.parametrize("z_mode", ["sample", "mean"])
+def test_reencode_mode_trains_the_mdn_on_fresh_encodings(z_mode):
+    """latents=reencode: the MDN-RNN trains on exactly the current encoder's latents of the
+    sampled frames, not the stored ones: the posterior means (z=mean), or samples of the
+    posterior drawn with the update's own noise, the third key of `split(key, 3)` (z=sample)."""
+    cfg = dataclasses.replace(SMALL, latents="reencode", z=z_mode)
     st = wm.init_learner(cfg, jax.random.PRNGKey(0))
     b = _batch(cfg, 2)
+    key = jax.random.PRNGKey(1)
     garbage = b._replace(latents=np.full_like(b.latents, np.nan))
-    st2, m = jax.jit(functools.partial(wm.learner_update, cfg))(st, garbage, jax.random.PRNGKey(1))
-    # the stored latents are ignored: the MDN sees the current VAE's means of the frames
+    st2, m = jax.jit(functools.partial(wm.learner_update, cfg))(st, garbage, key)
+    # the stored latents are ignored
     assert all(np.isfinite(np.asarray(v)).all() for v in m.values())
-    mu, _ = jax.jit(lambda p, f: wm.encode(cfg, p, f))(st.vae, b.frames)
+    mu, logvar = (np.asarray(x) for x in jax.jit(lambda p, f: wm.encode(cfg, p, f))(st.vae, b.frames))
+    eps = np.asarray(jax.random.normal(jax.random.split(key, 3)[2], mu.shape))
+    z = mu + np.exp(0.5 * logvar) * eps if z_mode == "sample" else mu
     carry = jax.tree.map(lambda x: x[:, 0], b.carry)
-    nll, _ = jax.jit(lambda p: wm.mdn_loss(cfg, p, carry, mu, b.actions))(st.rnn)
-    np.testing.assert_allclose(m["nll"], nll, rtol=1e-5)
+    nll_of = jax.jit(lambda p, z: wm.mdn_loss(cfg, p, carry, z, b.actions)[0])
+    np.testing.assert_allclose(m["nll"], nll_of(st.rnn, z), rtol=1e-5)
+    if z_mode == "sample":  # and it is a sample, not the mean
+        assert abs(float(m["nll"]) - float(nll_of(st.rnn, mu))) > 1e-3
+
+
+def test_curiosity_scale_sets_the_self_models_targets(update):
+    """The self-models learn to predict curiosity, so their targets follow `curiosity`: the
+    same update with curiosity=sum has targets (the recorded mean curiosity) `latent` times
+    those of curiosity=mean."""
+    summed = dataclasses.replace(SMALL, curiosity="sum")
+    assert SMALL.curiosity == "mean"
+    st = wm.init_learner(SMALL, jax.random.PRNGKey(0))
+    b, key = _batch(SMALL, 3), jax.random.PRNGKey(4)
+    _, m_mean = update(st, b, key)
+    _, m_sum = jax.jit(functools.partial(wm.learner_update, summed))(st, b, key)
+    np.testing.assert_allclose(m_sum["curiosity"], SMALL.latent * m_mean["curiosity"], rtol=1e-5)
+    np.testing.assert_allclose(m_sum["nll"], m_mean["nll"], rtol=1e-6)  # nothing else differs
+    assert float(m_mean["curiosity"]) > 0
+
+
+def test_sampled_latents_are_draws_from_the_posterior():
+    """`latent` with z=sample: a reparameterised draw of q(z|o) = N(mu, sigma^2). Over N = 4,000
+    keys, per dimension (24: 3 frames x 2 agents x 4), the z-score of the sample mean around
+    mu and that of the sample variance around sigma^2 (exactly chi-square, N dof) stay within
+    6: each fails with probability < 7e-9 for random keys, all 48 together < 1e-6. The same key
+    gives the same draw, different keys different draws, and z=mean gives mu."""
+    cfg = SMALL
+    frames = _frames(np.random.default_rng(0), (3, cfg.n_agents), cfg.image)
+    st = wm.init_learner(cfg, jax.random.PRNGKey(5))
+    mu, logvar = (np.asarray(x, np.float64) for x in wm.encode(cfg, st.vae, frames))
+    sigma = np.exp(0.5 * logvar)
+    n = 4000
+    keys = jax.random.split(jax.random.PRNGKey(6), n)
+    draws = np.asarray(jax.jit(jax.vmap(lambda k: wm.latent(cfg, st.vae, frames, k)))(keys), np.float64)
+    assert draws.shape == (n,) + mu.shape
+    z_mean = (draws.mean(0) - mu) / (sigma / np.sqrt(n))
+    chi2 = np.sum(np.square((draws - mu) / sigma), axis=0)  # ~ chi-square with n dof
+    z_var = (chi2 - n) / np.sqrt(2 * n)
+    print(f"max |z| of the mean {np.abs(z_mean).max():.2f}, of the variance {np.abs(z_var).max():.2f}; "
+          f"sigma in [{sigma.min():.3f}, {sigma.max():.3f}]")
+    assert np.abs(z_mean).max() < 6 and np.abs(z_var).max() < 6
+    assert np.all(draws[0] != draws[1])  # different keys, different draws (every element)
+    # the same key, the same draw (to float rounding: eager here, jitted and vmapped above)
+    np.testing.assert_allclose(np.asarray(wm.latent(cfg, st.vae, frames, keys[0])), draws[0], rtol=1e-5, atol=1e-6)
+    mean_cfg = dataclasses.replace(cfg, z="mean")
+    np.testing.assert_allclose(np.asarray(wm.latent(mean_cfg, st.vae, frames, keys[0])), mu, rtol=1e-6, atol=1e-7)
 
 
 def test_rnn_sequence_equals_repeated_single_steps():
@@ -357,3 +415,71 @@ def test_adam_follows_optax_adam():
         np.testing.assert_allclose(p_ours[name], p_ref[name], rtol=2e-5, atol=2e-6)
     assert not np.allclose(p_ours["w"], 0.0)  # it moved
     assert int(s_ours.count) == 50
+
+
+# ----------------------------------------------------------------------------------------
+# The acting loop's latents (mjx_curio/run.py)
+# ----------------------------------------------------------------------------------------
+
+RUN_LEARNER = LearnerConfig(image=8, n_agents=1, latent=4, vae_channels=(8, 8, 8, 8), dec_channels=(8, 8, 8, 8),
+                            rnn_hidden=8, mixtures=2, self_hidden=8, batch=2, seq_len=2)
+
+
+def _run_cfg(**learner):
+    from mjx_curio.run import RunConfig
+
+    return RunConfig(n_agents=1, image=8, buffer=8, learner=dataclasses.replace(RUN_LEARNER, **learner))
+
+
+def _posterior_draw(cfg, vae, frames, key):
+    """mu + sigma * eps with eps drawn from `key`: the expected z=sample latent, computed apart."""
+    mu, logvar = (np.asarray(x) for x in wm.encode(cfg, vae, frames))
+    return mu + np.exp(0.5 * logvar) * np.asarray(jax.random.normal(key, mu.shape)), mu
+
+
+def test_a_run_starts_from_a_posterior_sample_drawn_from_its_seed():
+    """init_run with z=sample: the first views' latent is a posterior draw whose noise is the
+    run key's fourth split (the first three are the arena's, the networks' and the run's
+    stream, as before the draw existed); the same key gives the same run."""
+    from mjx_curio import policies
+    from mjx_curio import run as run_lib
+
+    policy = policies.PolicyParams(jnp.int32(0), jnp.float32(0.2), jnp.float32(1.5), jnp.float32(1.0))
+    key = run_lib.key_for_seed(3)
+    init = jax.jit(run_lib.init_run, static_argnums=0)
+    cfg = _run_cfg()
+    s = init(cfg, key, policy)
+    expected, mu = _posterior_draw(cfg.learner, s.learner.vae, s.frames, jax.random.split(key, 4)[3])
+    np.testing.assert_allclose(np.asarray(s.z), expected, rtol=1e-5, atol=1e-6)
+    assert np.all(np.abs(np.asarray(s.z) - mu) > 0)
+    np.testing.assert_array_equal(np.asarray(init(cfg, key, policy).z), np.asarray(s.z))
+    np.testing.assert_array_equal(np.asarray(s.key), np.asarray(jax.random.split(key, 3)[2]))
+
+
+@pytest.mark.slow
+def test_acting_and_learning_use_posterior_samples_from_the_run_key():
+    """act and learn with z=sample: the latent of the new view (the next step's self-model and
+    memory input, and this step's curiosity target) is a posterior draw with the noise of the
+    step key's third split; learn re-encodes the current view with the updated VAE and the
+    fourth split; the curiosity is the mean squared error over the latent dimensions."""
+    from mjx_curio import policies
+    from mjx_curio import run as run_lib
+
+    cfg = _run_cfg()
+    lc = cfg.learner
+    policy = policies.PolicyParams(jnp.int32(0), jnp.float32(0.2), jnp.float32(1.5), jnp.float32(1.0))
+    s = jax.jit(run_lib.init_run, static_argnums=0)(cfg, run_lib.key_for_seed(4), policy)
+    act = jax.jit(lambda s: run_lib.act(cfg, s))
+    for _ in range(4):  # enough replay for one learner update (seq_len + 1 steps)
+        before = s
+        s, m = act(s)
+    expected, _ = _posterior_draw(lc, s.learner.vae, s.frames, jax.random.split(before.key, 3)[2])
+    np.testing.assert_allclose(np.asarray(s.z), expected, rtol=1e-5, atol=1e-6)
+    _, mix = wm.rnn_step(lc, before.learner.rnn, before.carry, before.z, m["action"])
+    mean_sq = np.mean(np.square(expected - np.asarray(wm.mixture_mean(mix))), axis=-1)
+    np.testing.assert_allclose(np.asarray(m["curiosity"]), mean_sq, rtol=1e-4, atol=1e-6)
+
+    learned, lm = jax.jit(lambda s: run_lib.learn(cfg, s))(s)
+    assert int(lm["updated"]) == 1
+    expected, _ = _posterior_draw(lc, learned.learner.vae, s.frames, jax.random.split(s.key, 4)[3])
+    np.testing.assert_allclose(np.asarray(learned.z), expected, rtol=1e-5, atol=1e-6)
