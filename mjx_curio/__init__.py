@@ -5,12 +5,13 @@ import os as _os
 # XLA CPU flags, set before JAX initialises its backend (which happens lazily at the first
 # computation, so importing this package first is enough). A flag the user already set wins.
 _FLAGS = {
-    # The concurrency-optimised scheduler deadlocks vmapped MJX steps over many worlds
-    # (FACTS.md).
+    # The concurrency-optimised scheduler deadlocks vmapped MJX steps over many worlds: a
+    # jitted, vmapped mjx.step over 24 worlds hung on its first call with every thread idle.
     "xla_cpu_enable_concurrency_optimized_scheduler": "false",
     # YNNPACK's dot kernels sum in an order that depends on how many threads the device has,
-    # so the same run gave different numbers on one device and on two (forced host devices
-    # split the cores). Without them a run is bit-identical on any number of devices.
+    # so the same runs gave different numbers on one device and on two (forced host devices
+    # split the cores). Without them a device's runs are bit-identical to a one-device sweep
+    # of the same runs (run.py says what differs with other numbers of runs a device).
     "xla_cpu_experimental_ynn_fusion_type": "",
 }
 _given = _os.environ.get("XLA_FLAGS", "")

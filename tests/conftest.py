@@ -71,6 +71,18 @@ def tiny_sweep(tmp_path_factory) -> pathlib.Path:
     return out
 
 
+# The quick tier, `pytest -m "not slow"`: every test that needs one of the session's sweeps (each
+# compiles and runs a whole sweep program) is slow; other slow tests carry the mark themselves.
+SWEEP_FIXTURES = {"tiny_sweep", "tiny_single_sweep", "tiny_single_started", "tiny_sweeps_dir", "sharded_sweep"}
+
+
+@pytest.hookimpl(tryfirst=True)  # before -m deselects by marker
+def pytest_collection_modifyitems(config, items):
+    for item in items:
+        if SWEEP_FIXTURES & set(getattr(item, "fixturenames", ())):
+            item.add_marker(pytest.mark.slow)
+
+
 # ------------------------------------------------------------------------------------------------
 # Analysis, notebook and video tests (test_analysis.py, test_notebook.py, test_video.py): a tiny
 # single-agent sweep too, made in a background process while `tiny_sweep` is made in this one
@@ -116,7 +128,7 @@ def tiny_sweeps_dir(tmp_path_factory, tiny_single_started, tiny_sweep, tiny_sing
 # in the cache to share), so it is started as soon as the session knows it will need it, and
 # compiles on the second core while the other tests run.
 
-SHARDED_TEST = "test_sharded_over_two_devices_equals_one_device"
+SHARDED_TEST = "test_sharding_gives_every_device_its_own_runs_with_their_own_keys"
 _sharded: dict = {}
 
 

@@ -2,8 +2,9 @@
 
 Each process runs the same `python -m mjx_curio.sweep` command with JAX_COORDINATOR_ADDRESS,
 JAX_NUM_PROCESSES and JAX_PROCESS_ID set, as a cluster scheduler would start it on two hosts;
-the runs axis spans both processes' devices. The result must equal the tiny sweep (to float
-rounding, as for two devices in one process: tests/test_sweep.py).
+the runs axis spans both processes' devices. Each process's device runs the same program as a
+device of the two-device sweep in one process, so the two agree bit for bit; against the
+one-device tiny sweep, what sharding guarantees is compared (tests/test_sweep.py).
 
 Opt-in (MJX_CURIO_MULTIPROCESS=1): two more compiles, ~90 s on two cores, which the default
 suite leaves out to stay well under its time budget. Measured 2026-11-22: passes, and the two-
@@ -19,7 +20,7 @@ import sys
 import pytest
 
 from conftest import CACHE, TINY_SWEEP
-from test_sweep import _assert_close_metrics, _assert_close_tree, _metrics, _state
+from test_sweep import _assert_same_metrics, _assert_same_tree, _metrics, _state, assert_same_runs_on_other_devices
 
 pytestmark = pytest.mark.skipif(os.environ.get("MJX_CURIO_MULTIPROCESS") != "1",
                                 reason="multi-process sweep: opt in with MJX_CURIO_MULTIPROCESS=1 (~90 s)")
@@ -31,7 +32,7 @@ def _free_port() -> int:
         return s.getsockname()[1]
 
 
-def test_two_processes_equal_one(tiny_sweep, tmp_path):
+def test_two_processes_equal_two_devices_in_one(tiny_sweep, sharded_sweep, tmp_path):
     out = tmp_path / "two_processes"
     port = _free_port()
     procs = [subprocess.Popen([sys.executable, "-m", "mjx_curio.sweep", *TINY_SWEEP, f"out={out}", f"compile_cache={CACHE}"],
@@ -44,5 +45,6 @@ def test_two_processes_equal_one(tiny_sweep, tmp_path):
         assert p.returncode == 0, err[-4000:]
     device = json.loads((out / "manifest.json").read_text())["device"]
     assert (device["processes"], device["count"]) == (2, 2)
-    _assert_close_metrics(_metrics(out), _metrics(tiny_sweep), "2 processes vs 1")
-    _assert_close_tree(_state(out, 200), _state(tiny_sweep, 200), "final checkpoint, 2 processes vs 1")
+    _assert_same_metrics(_metrics(out), _metrics(sharded_sweep), "2 processes vs 2 devices in one")
+    _assert_same_tree(_state(out, 200), _state(sharded_sweep, 200), "final checkpoint, 2 processes vs 2 devices in one")
+    assert_same_runs_on_other_devices(out, tiny_sweep, "2 processes vs 1 device")

@@ -1,0 +1,88 @@
+"""What a sweep's manifest records about how it was made: the command, every setting, the runs,
+the package versions, the device and the git commit."""
+
+from __future__ import annotations
+
+import dataclasses
+import datetime
+import platform
+import subprocess
+import pathlib
+
+import mjx_curio
+
+FORMAT = "mjx_curio.sweep/1"
+
+
+def manifest(p, run_cfg, devices, n_pad: int, n_windows: int) -> dict:
+    """p: the sweep's `plan.Plan`; run_cfg: its RunConfig with runs_loop resolved."""
+    from mjx_curio import distributed
+    from mjx_curio import metrics as metrics_lib
+    from mjx_curio.arena import ACTIONS, OBJECTS
+    from mjx_curio.plan import KEYS, config_of
+
+    return {
+        "format": FORMAT,
+        "created": datetime.datetime.now().isoformat(timespec="seconds"),
+        "command": " ".join(["python -m mjx_curio.sweep"] + [f"{k.name}={k.kind.show(p.values[k.name])}" for k in KEYS]),
+        "config": config_of(p.values),
+        "run_config": _plain(dataclasses.asdict(run_cfg)),
+        "runs": [dict(index=i, name=r.name, **dataclasses.asdict(r)) for i, r in enumerate(p.runs)],
+        "padded_runs": n_pad,
+        "n_agents": run_cfg.n_agents,
+        "agent_names": ["green", "purple"][: run_cfg.n_agents],
+        "actions": list(ACTIONS),
+        "objects": list(OBJECTS),
+        "view_targets": list(metrics_lib.VIEW_TARGETS),
+        "metrics": {"every": run_cfg.metrics_every, "windows": n_windows, "steps_file": "metrics/steps.npy",
+                    "schema": metrics_lib.schema_doc()},
+        "steps_planned": [{"steps": p.values["steps"], "from_step": 0}],
+        "checkpoints": {"state": "checkpoints/state/<step>", "replay": "checkpoints/replay/<step>"},
+        "versions": versions(),
+        "device": {"platform": devices[0].platform, "kind": devices[0].device_kind, "count": len(devices),
+                   "processes": distributed.process_count(), "host": platform.node(), "cpu": cpu_name()},
+        "git": git(),
+    }
+
+
+def _plain(x):
+    if isinstance(x, dict):
+        return {k: _plain(v) for k, v in x.items()}
+    if isinstance(x, (tuple, list)):
+        return [_plain(v) for v in x]
+    return x
+
+
+def versions() -> dict:
+    from importlib import metadata
+
+    out = {"python": platform.python_version(), "mjx_curio": mjx_curio.__version__}
+    for pkg in ("jax", "jaxlib", "mujoco", "mujoco-mjx", "flax", "optax", "orbax-checkpoint", "numpy"):
+        try:
+            out[pkg] = metadata.version(pkg)
+        except metadata.PackageNotFoundError:
+            out[pkg] = None
+    return out
+
+
+def cpu_name() -> str:
+    try:
+        for line in open("/proc/cpuinfo"):
+            if line.startswith("model name"):
+                return line.split(":", 1)[1].strip()
+    except OSError:
+        pass
+    return platform.processor()
+
+
+def git() -> dict:
+    here = pathlib.Path(__file__).resolve().parent
+    try:
+        commit = subprocess.run(["git", "-C", str(here), "rev-parse", "HEAD"], capture_output=True, text=True, timeout=10)
+        dirty = subprocess.run(["git", "-C", str(here), "status", "--porcelain", "--", "."], capture_output=True,
+                               text=True, timeout=10)
+        if commit.returncode == 0:
+            return {"commit": commit.stdout.strip(), "dirty": bool(dirty.stdout.strip())}
+    except (OSError, subprocess.TimeoutExpired):
+        pass
+    return {"commit": None, "dirty": None}
