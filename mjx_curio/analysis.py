@@ -474,7 +474,7 @@ def run_config(manifest: dict):
 
 def run_specs(manifest: dict) -> tuple:
     """The sweep's `sweep.RunSpec`s, in the order of the runs axis."""
-    from mjx_curio.sweep import RunSpec
+    from mjx_curio.plan import RunSpec
 
     return tuple(RunSpec(r["policy"], int(r["seed"]), float(r["eps"]), float(r["temperature"]), float(r["ucb_c"]))
                  for r in manifest["runs"])

@@ -46,7 +46,7 @@ with contextlib.redirect_stdout(io.StringIO()):
     from mujoco import mjx
 
 from mjx_curio import render as render_lib
-from mjx_curio.config import CAMERAS, FRICTIONS, ConfigError, check_choice, check_float, check_int
+from mjx_curio.config import CAMERAS, FRICTIONS, MAX_JITTER, N_AGENTS, WALLS, ConfigError, check_choice, check_float, check_int
 
 
 def _scenes_dir() -> pathlib.Path:
@@ -69,8 +69,6 @@ SCENES = _scenes_dir()
 
 ACTIONS = ("forward", "backward", "left", "right", "rotate_left", "rotate_right", "stop")
 OBJECTS = ("pyramid", "cylinder", "sphere", "disc")
-WALLS = ("same", "different")
-N_AGENTS = (1, 2)
 AGENT_NAMES = ("agent_green", "agent_purple")
 
 FORCE = 50.0  # N, forward/backward/sideways push
@@ -89,9 +87,8 @@ UNIT_PAIR_FRICTION = (1.0, 1.0, 0.005, 0.0001, 0.0001)
 # pairs touching means overlapping; the agents' round proxy against the disc
 # reports true gaps, so there a cube within 5 mm of the disc counts as touching.
 TOUCH_TOL = 5e-3
-# Objects start at most this far from the paper's layout: up to 0.4 m no two bodies can
-# start overlapping (measured over 4,000 resets; at 0.5 m, 8 % of layouts overlapped).
-MAX_JITTER = 0.4
+# Objects start at most MAX_JITTER (config.py) from the paper's layout: up to 0.4 m no two bodies
+# can start overlapping (measured over 4,000 resets; at 0.5 m, 8 % of layouts overlapped).
 
 # Per action: (force along heading, force to the left, yaw rate, stop?)
 _ACTION_TABLE = np.array(

@@ -253,20 +253,30 @@ def bench_sweep(args: dict) -> dict:
     workload: each chunk of `steps` agent steps renders, encodes, remembers, predicts, acts and
     steps physics every step and trains every `update_every` steps, exactly as
     `python -m mjx_curio.sweep` runs. Aggregate speed = runs x steps / seconds per chunk."""
+    if args["fidelity"] == "both":  # one after the other in this process: the cost of faithfulness
+        paper = bench_sweep({**args, "fidelity": "paper"})
+        legacy = bench_sweep({**args, "fidelity": "legacy"})
+        return {"what": "sweep", "paper": paper, "legacy": legacy,
+                "paper_over_legacy_speed": round(paper["run_steps_per_s"] / legacy["run_steps_per_s"], 3),
+                "run_steps_per_s": paper["run_steps_per_s"], "agent_steps_per_s": paper["agent_steps_per_s"],
+                "peak_rss_mib": _peak_rss_mib(), **_platform()}
+    from mjx_curio import config as config_lib
     from mjx_curio import run as run_lib
-    from mjx_curio import sweep as sweep_lib
+    from mjx_curio.plan import RunSpec
+    from mjx_curio.program import SweepProgram
 
     devices = jax.devices()
     loop = args["runs_loop"] if args["runs_loop"] != "auto" else ("map" if devices[0].platform == "cpu" else "vmap")
+    old = args["fidelity"] == "legacy"
     learner = LearnerConfig(image=args["image"], n_agents=args["agents"], batch=args["batch"], seq_len=args["seq_len"],
-                            latents=args["latents"])
+                            latents=args["latents"], **(config_lib.legacy_settings(LearnerConfig) if old else {}))
     cfg = run_lib.RunConfig(n_agents=args["agents"], image=args["image"], buffer=args["buffer"],
                             update_every=args["update_every"], metrics_every=args["update_every"], runs_loop=loop,
-                            learner=learner)
+                            learner=learner, **(config_lib.legacy_settings(run_lib.RunConfig) if old else {}))
     policies = ("eps", "boltzmann", "ucb")
-    runs = tuple(sweep_lib.RunSpec(policies[i % 3], args["seed"] + i // 3, 0.2, 1.5, 1.0) for i in range(args["runs"]))
+    runs = tuple(RunSpec(policies[i % 3], args["seed"] + i // 3, 0.2, 1.5, 1.0) for i in range(args["runs"]))
     n_pad = -len(runs) % len(devices)
-    program = sweep_lib.SweepProgram(cfg, runs, n_pad, args["steps"])
+    program = SweepProgram(cfg, runs, n_pad, args["steps"])
     t0 = time.perf_counter()
     states = program.init()
     jax.block_until_ready(states)
@@ -284,6 +294,7 @@ def bench_sweep(args: dict) -> dict:
     run_steps = len(runs) * args["steps"] / best
     return {
         "what": "sweep",
+        "fidelity": args["fidelity"],
         "runs": len(runs),
         "agents": args["agents"],
         "image": args["image"],
@@ -323,6 +334,9 @@ KEYS = [
     Key("update_every", 4, "sweep: agent steps between learner updates", as_int(1)),
     Key("buffer", 10_000, "sweep: replay capacity per run", as_int(3)),
     Key("runs_loop", "auto", "sweep: map | vmap | auto (map on CPU)", as_choice(("auto", "map", "vmap"))),
+    Key("fidelity", "paper", "sweep: paper (the defaults) | legacy (the settings before the paper-faithful defaults: "
+        "square camera, mean latents, summed curiosity, unit pair friction, free bits) | both, one after the other",
+        as_choice(("paper", "legacy", "both"))),
     Key("seed", 0, "random seed", as_int(0)),
 ]
 

@@ -128,7 +128,7 @@ class Checkpoints:
         """Checkpoint `step`'s state as nested dicts of arrays on this process's first device, no
         target structure needed (what analysis.py uses to decode with saved parameters). Reads a
         sweep saved on any number of devices, e.g. on a GPU host, on a one-CPU laptop."""
-        path = self.directory / "state" / str(step) / "default"
+        path = (self.directory / "state" / str(step) / "default").absolute()  # orbax wants absolute paths
         local = jax.sharding.SingleDeviceSharding(jax.local_devices()[0])
         with ocp.StandardCheckpointer() as reader:
             meta = reader.metadata(path)

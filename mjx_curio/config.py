@@ -249,6 +249,12 @@ def key_name(f: dataclasses.Field) -> str:
     return f.metadata["key"] or f.name
 
 
+def legacy_settings(cls) -> dict:
+    """{field: value} of every knob of `cls` whose behaviour before the paper-faithful defaults
+    differs from its default (what a sweep made before them ran with)."""
+    return {f.name: f.metadata["legacy"] for f in knobs(cls) if "legacy" in f.metadata}
+
+
 def check_knobs(obj) -> None:
     """Check (and normalise: lists to tuples, ints to floats where a float is asked) every knob
     of a frozen config dataclass; called by each one's __post_init__."""
@@ -297,7 +303,7 @@ class LearnerConfig:
     # before 0 became the default record their 0.5 in the manifest.)
     beta: float = knob(1.0, "weight of the VAE's KL term", Float(0.0))
     kl_tolerance: float = knob(0.0, "VAE free bits: KL floor in nats per latent dimension (0: none, as the paper)",
-                               Float(0.0))
+                               Float(0.0), legacy=0.5)
     rnn_hidden: int = knob(256, "MDN-RNN LSTM units (paper: 256)", Int(1))
     mixtures: int = knob(5, "Gaussians per latent dimension in the MDN head", Int(1))
     self_hidden: int = knob(256, "hidden width of each agent's self-model MLP", Int(1))

@@ -70,7 +70,7 @@ def test_select_and_groups(sweep):
 def test_configs_from_manifest(sweep):
     import dataclasses
 
-    from mjx_curio.sweep import grid
+    from mjx_curio.plan import grid
 
     cfg = sweep.run_config()
     assert cfg.image == 16 and cfg.n_agents == 2 and cfg.learner.image == 16 and cfg.learner.n_agents == 2

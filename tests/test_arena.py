@@ -534,6 +534,7 @@ def rollout():
     return arena, start_objects, rec
 
 
+@pytest.mark.slow
 def test_rollout_has_no_nan_and_nothing_leaves_the_room(rollout):
     arena, _, rec = rollout
     assert np.isfinite(rec["qpos"]).all() and np.isfinite(rec["qvel"]).all(), "NaN/inf in qpos or qvel"
@@ -601,6 +602,7 @@ def _lowest_collision_point(m, name, pos, quat) -> np.ndarray:
     return lowest
 
 
+@pytest.mark.slow
 def test_reset_jitter_moves_objects_within_the_bound(rollout):
     arena, start_objects, rec = rollout  # start_objects: [worlds, objects, 3]
     layout = _paper_layout()
@@ -625,6 +627,7 @@ def _paper_layout():
     return np.array([facts[o] for o in OBJECTS])
 
 
+@pytest.mark.slow
 def test_contact_flags_agree_with_mujoco_c_collisions(rollout):
     """Every recorded step's flags against MuJoCo's C collision code run on the qpos the step
     started from: a pair touches when any contact between their geoms has dist < TOUCH_TOL.

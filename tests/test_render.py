@@ -182,7 +182,9 @@ def _hand_checked_state(m):
     return d
 
 
-@pytest.mark.parametrize("scene", ["arena_same_1", "arena_different_1", "arena_same_2", "arena_different_2"])
+# The quick tier checks one scene of each agent count; the full suite all four.
+@pytest.mark.parametrize("scene", ["arena_same_1", pytest.param("arena_different_1", marks=pytest.mark.slow),
+                                   pytest.param("arena_same_2", marks=pytest.mark.slow), "arena_different_2"])
 def test_geom_ids_match_mujoco_renderer(scene, make_gl):
     m = _model(scene)
     gl = make_gl(m)
@@ -222,7 +224,7 @@ def _nearest(n, size):
     return np.floor((np.arange(n) + 0.5) * size / n).astype(int)
 
 
-@pytest.mark.parametrize("scene", ["arena_same_1", "arena_different_2"])
+@pytest.mark.parametrize("scene", [pytest.param("arena_same_1", marks=pytest.mark.slow), "arena_different_2"])
 def test_authors_camera_matches_mujoco_at_640x480_resized(scene, make_gl):
     """The authors' camera (their code renders 640 x 480 at fovy 90 and resizes to 64 x 64): our
     64 x 64 image, ray cast directly, against MuJoCo's segmentation render of the same camera

@@ -51,6 +51,7 @@ def test_agent_cameras_match_renderer(world):
     np.testing.assert_array_equal(np.asarray(got[1]), np.asarray(expected[1]))
 
 
+@pytest.mark.slow
 def test_overhead_view(world):
     m, d, arrays = world
     image = 96

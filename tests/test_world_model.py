@@ -246,6 +246,7 @@ def update():
     return jax.jit(functools.partial(wm.learner_update, SMALL))
 
 
+@pytest.mark.slow
 def test_learner_update_vmapped_over_runs_equals_separate_updates(update):
     keys = jax.random.split(jax.random.PRNGKey(0), 3)
     states = [wm.init_learner(SMALL, k) for k in keys]
@@ -437,6 +438,7 @@ def _posterior_draw(cfg, vae, frames, key):
     return mu + np.exp(0.5 * logvar) * np.asarray(jax.random.normal(key, mu.shape)), mu
 
 
+@pytest.mark.slow
 def test_a_run_starts_from_a_posterior_sample_drawn_from_its_seed():
     """init_run with z=sample: the first views' latent is a posterior draw whose noise is the
     run key's fourth split (the first three are the arena's, the networks' and the run's
