@@ -44,12 +44,12 @@ SUMMARY = ("Film one run of a sweep from a checkpoint: egocentric views with the
            "top-down view of the arena (MP4 when an encoder is available, else GIF).")
 
 KEYS = (
-    Key("sweep", "", "sweep directory (required)", as_str),
+    Key("sweep", "", "sweep directory", as_str, shown="required"),
     Key("run", "0", "run index (the manifest's order) or run name", as_str),
     Key("step", -1, "checkpoint to start from: -1 the newest, 0 the run's start (no checkpoint needed)", as_int(-1)),
     Key("frames", 300, "agent steps to film, one video frame each", as_int(1)),
-    Key("out", "", "output file, .mp4 or .gif (default <sweep>/videos/<run>-from<step>.mp4, or .gif without an MP4 "
-                   "encoder)", as_str),
+    Key("out", "", "output file, .mp4 or .gif (.gif without an MP4 encoder)", as_str,
+        shown="<sweep>/videos/<run>-from<step>.mp4"),
     Key("fps", 15, "video frames per second (the arena runs 60 steps per simulated second)", as_int(1, 100)),
     Key("scale", 0, "magnification of the egocentric views (0: to about 128 px)", as_int(0, 64)),
     Key("top", 192, "side of the top-down view in pixels (0: no top-down view)", as_int(0, 2048)),

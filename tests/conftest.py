@@ -140,6 +140,12 @@ def _start_sharded_sweep(out: pathlib.Path) -> subprocess.Popen:
 
 
 def pytest_collection_finish(session):
+    # A quick_only test stands in, in the quick tier, for what the slow tests check in depth: when
+    # they run too (the full suite), it is skipped rather than paid for twice.
+    if any(item.get_closest_marker("slow") for item in session.items):
+        for item in session.items:
+            if item.get_closest_marker("quick_only"):
+                item.add_marker(pytest.mark.skip(reason="the full suite's slow tests cover this in depth"))
     if any(item.name == SHARDED_TEST for item in session.items):
         out = pathlib.Path(tempfile.mkdtemp(prefix="mjx_curio_sharded_")) / "sharded"
         _sharded.update(out=out, proc=_start_sharded_sweep(out))

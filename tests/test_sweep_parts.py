@@ -136,6 +136,7 @@ MINIMAL = ("agents=1", "policies=eps,ucb", "seeds=1", "image=8", "latent=4", "va
            "checkpoint_every=20", "keep_steps=20", "keep_every=0", "progress=false")
 
 
+@pytest.mark.quick_only
 def test_a_minimal_sweep_runs_every_stage_and_resumes_longer(tmp_path):
     from mjx_curio import checkpoint as ckpt_lib
 
@@ -157,3 +158,24 @@ def test_a_minimal_sweep_runs_every_stage_and_resumes_longer(tmp_path):
     assert np.load(out / "metrics" / "curiosity.npy").shape == (2, 3, 1)
     assert np.isfinite(np.load(out / "metrics" / "curiosity.npy")).all()
     assert json.loads((out / "progress.json").read_text())["steps_done"] == 60
+
+
+def test_a_sweep_made_before_the_fidelity_settings_is_refused_by_resume_naming_them(tmp_path):
+    """Its manifest lacks the newer keys: they are read as the behaviour it had, so resuming it
+    under today's defaults would change its physics, camera and learner mid-run."""
+    values = sweep_lib.cli.parse([f"out={tmp_path}"], sweep_lib.KEYS)
+    new_keys = ("camera", "friction", "z", "curiosity", "kl_tolerance")  # the learner knobs were no keys then
+    old_config = {k: v for k, v in plan.config_of(values).items() if k not in new_keys}
+    old_run = {"walls": "same", "learner": {"kl_tolerance": 0.5}}
+    (tmp_path / "manifest.json").write_text(json.dumps({"config": old_config, "run_config": old_run}))
+    with pytest.raises(ConfigError) as err:
+        plan.plan({**values, "resume": True})
+    text = str(err.value)
+    for change in ("camera: saved 'square', given 'authors'", "friction: saved 'unit', given 'geoms'",
+                   "z: saved 'mean', given 'sample'", "curiosity: saved 'sum', given 'mean'",
+                   "kl_tolerance: saved 0.5, given 0.0"):
+        assert change in text, text
+    # Resumed with its own settings, it plans.
+    legacy = ["camera=square", "friction=unit", "z=mean", "curiosity=sum", "kl_tolerance=0.5", f"out={tmp_path}",
+              "resume=true"]
+    assert plan.plan(sweep_lib.cli.parse(legacy, sweep_lib.KEYS)).resume
