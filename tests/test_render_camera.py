@@ -73,6 +73,7 @@ def test_overhead_view(world):
     assert rgb.std() > 10
 
 
+@pytest.mark.slow
 def test_authors_camera_renderer_and_square_views(world):
     """The agents' views of an authors'-camera renderer (source=(640, 480)) are its own rays, not
     a square camera's; `view` with source=None from the same renderer, as video.py draws its

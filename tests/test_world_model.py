@@ -122,6 +122,7 @@ def _effects(seed):
     return np.random.default_rng(seed).uniform(-1.5, 1.5, (MDN_CFG.n_agents, N_ACT, MDN_CFG.latent))
 
 
+@pytest.mark.slow
 def test_mdn_nll_falls_below_best_action_blind_predictor(mdn_fns):
     sigma = 0.1
     effects = _effects(10)
@@ -135,6 +136,7 @@ def test_mdn_nll_falls_below_best_action_blind_predictor(mdn_fns):
     assert nll1 < blind - 1.5, (nll1, blind)
 
 
+@pytest.mark.slow
 def test_curiosity_near_zero_for_a_learned_deterministic_process(mdn_fns):
     effects = _effects(20)
     (_, cur0), (_, cur1), (z_te, _) = _fit(mdn_fns, effects, 0.0, steps=2500, seed=2)
@@ -308,7 +310,7 @@ def test_learner_update_starts_bptt_from_the_stored_carry(update):
     assert abs(float(m_first["nll"]) - float(m["nll"])) > 1e-3
 
 
-@pytest.mark.parametrize("z_mode", ["sample", "mean"])
+@pytest.mark.parametrize("z_mode", ["sample", pytest.param("mean", marks=pytest.mark.slow)])
 def test_reencode_mode_trains_the_mdn_on_fresh_encodings(z_mode):
     """latents=reencode: the MDN-RNN trains on exactly the current encoder's latents of the
     sampled frames, not the stored ones: the posterior means (z=mean), or samples of the

@@ -1,0 +1,155 @@
+"""Evidence for the MDN-RNN's training latents: `latents=stored` against `latents=reencode`.
+
+    python experiments/latents_evidence.py staleness runs/latents/stored
+    python experiments/latents_evidence.py curves runs/latents/stored runs/latents/reencode
+
+`staleness SWEEP` measures, at the sweep's newest checkpoint (the one that keeps the replay
+buffers), how far the latents stored in replay when each step was acted lie from what the
+current encoder makes of the same frames, relative to the spread of latents, and appends the
+figures to docs/latents/staleness.json (one entry per sweep and step; run it at 1k, 5k, ...
+by resuming the sweep to each step in turn).
+
+`curves STORED REENCODE` draws both sweeps' curiosity (and MDN-RNN loss) with 95 % confidence
+bands across seeds into docs/figures/latents_*.png and writes docs/latents/curves.json: per
+seed, the mean curiosity over the last quarter of the run, and Welch's t-test between modes.
+"""
+
+from __future__ import annotations
+
+import json
+import pathlib
+import sys
+
+import mjx_curio  # noqa: F401  (XLA flags before JAX initialises)
+
+import numpy as np
+
+DOCS = pathlib.Path(__file__).resolve().parents[1] / "docs"
+
+
+def _replay(sweep, step: int) -> dict:
+    """The replay buffers of checkpoint `step` as NumPy arrays (leading runs axis)."""
+    import jax
+    import orbax.checkpoint as ocp
+
+    path = (sweep.checkpoints_dir / "replay" / str(step) / "default").absolute()
+    local = jax.sharding.SingleDeviceSharding(jax.local_devices()[0])
+    with ocp.StandardCheckpointer() as reader:
+        meta = reader.metadata(path)
+        tree = getattr(meta, "item_metadata", meta)
+        target = jax.tree.map(lambda m: jax.ShapeDtypeStruct(m.shape, m.dtype, sharding=local), tree)
+        return jax.tree.map(np.asarray, reader.restore(path, target))
+
+
+def staleness(path: str) -> dict:
+    import jax
+    import jax.numpy as jnp
+
+    from mjx_curio import analysis as an
+    from mjx_curio import world_model as wm
+
+    sweep = an.load(path)
+    cfg = sweep.learner_config()
+    step = max(sweep.replay_steps())
+    replay = _replay(sweep, step)
+    state = sweep.restore_raw(step)
+    enc = jax.jit(lambda params, frames: wm.encode(cfg, params, frames))
+    rows = []
+    for r in range(sweep.n_runs):
+        size, head = int(replay["size"][r]), int(replay["index"][r])
+        frames, stored = replay["frames"][r, :size], replay["latents"][r, :size]  # [N, agents, ...]
+        vae = jax.tree.map(lambda x: x[r], state["learner"]["vae"])
+        mus, sigmas = [], []
+        for lo in range(0, size, 512):
+            mu, logvar = enc(vae, jnp.asarray(frames[lo:lo + 512]))
+            mus.append(np.asarray(mu))
+            sigmas.append(np.exp(0.5 * np.asarray(logvar)))
+        mu, sigma = np.concatenate(mus), np.concatenate(sigmas)
+        # Age of each slot in agent steps: the slot just before the write head is the newest.
+        age = (head - 1 - np.arange(size)) % replay["frames"].shape[1] + 1
+        rng = np.random.default_rng(r)
+        fresh = mu + sigma * rng.standard_normal(mu.shape)  # what the current encoder would store now
+        d_stored = np.linalg.norm(stored - mu, axis=-1)  # [N, agents]
+        d_fresh = np.linalg.norm(fresh - mu, axis=-1)
+        i, j = rng.integers(0, size, 4000), rng.integers(0, size, 4000)
+        spread = float(np.mean(np.linalg.norm(mu[i] - mu[j], axis=-1)))
+        old = age > np.median(age)
+        rows.append({"run": sweep.runs[r].name, "entries": size, "spread": spread,
+                     "stored_vs_current": float(d_stored.mean()), "fresh_sample_vs_current": float(d_fresh.mean()),
+                     "stored_vs_current_older_half": float(d_stored[old].mean()),
+                     "stored_vs_current_newer_half": float(d_stored[~old].mean())})
+    summary = {k: float(np.mean([row[k] for row in rows])) for k in rows[0] if k not in ("run", "entries")}
+    result = {"sweep": str(path), "step": step, "z": cfg.z, "latents": cfg.latents, "runs": rows, "mean": summary,
+              "relative": {"stored": summary["stored_vs_current"] / summary["spread"],
+                           "fresh_sample": summary["fresh_sample_vs_current"] / summary["spread"],
+                           "stored_older_half": summary["stored_vs_current_older_half"] / summary["spread"],
+                           "stored_newer_half": summary["stored_vs_current_newer_half"] / summary["spread"]}}
+    out = DOCS / "latents" / "staleness.json"
+    out.parent.mkdir(parents=True, exist_ok=True)
+    saved = json.loads(out.read_text()) if out.exists() else []
+    saved = [e for e in saved if not (e["sweep"] == result["sweep"] and e["step"] == step)] + [result]
+    out.write_text(json.dumps(sorted(saved, key=lambda e: (e["sweep"], e["step"])), indent=2) + "\n")
+    print(json.dumps({"step": step, **result["relative"]}, indent=1))
+    return result
+
+
+def curves(stored_path: str, reencode_path: str) -> dict:
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    from mjx_curio import analysis as an
+
+    sweeps = {"stored": an.load(stored_path), "reencode": an.load(reencode_path)}
+    colors = {"stored": "tab:blue", "reencode": "tab:orange"}
+    fig, axes = plt.subplots(1, 2, figsize=(11, 4))
+    result = {}
+    for name, sweep in sweeps.items():
+        steps = sweep.steps[: sweep.steps_done // sweep.manifest["metrics"]["every"]]
+        n = len(steps)
+        for ax, metric, label in ((axes[0], "curiosity", "curiosity"), (axes[1], "nll", "MDN-RNN loss")):
+            x = sweep.metrics[metric][:, :n]
+            x = x.mean(axis=-1) if x.ndim == 3 else x  # both agents
+            sm = an.moving_average(x, 50, axis=1)
+            mean, lo, hi, _ = an.mean_ci(sm, axis=0)
+            ax.plot(steps, mean, color=colors[name], label=f"latents={name} ({x.shape[0]} seeds)")
+            ax.fill_between(steps, lo, hi, color=colors[name], alpha=0.25, lw=0)
+            ax.set_xlabel("agent step")
+            ax.set_ylabel(label + (" (mean squared latent error per dimension)" if metric == "curiosity" else " (nats)"))
+            ax.legend()
+        cur = sweep.metrics["curiosity"][:, :n].mean(axis=-1)
+        last = cur[:, 3 * n // 4:].mean(axis=1)
+        result[name] = {"seeds": int(cur.shape[0]), "steps": int(steps[-1]), "last_quarter_curiosity": last.tolist()}
+    axes[0].set_title("Curiosity, moving average of 50 windows, 95 % CI across seeds")
+    axes[1].set_title("MDN-RNN negative log-likelihood")
+    fig.tight_layout()
+    out = DOCS / "figures" / "latents_curves.png"
+    fig.savefig(out, dpi=90)
+    a, b = np.array(result["stored"]["last_quarter_curiosity"]), np.array(result["reencode"]["last_quarter_curiosity"])
+    t, p = _welch(a, b)
+    result["welch_last_quarter"] = {"t": t, "p": p, "stored_mean": float(a.mean()), "reencode_mean": float(b.mean())}
+    (DOCS / "latents").mkdir(parents=True, exist_ok=True)
+    (DOCS / "latents" / "curves.json").write_text(json.dumps(result, indent=2) + "\n")
+    print(json.dumps(result["welch_last_quarter"], indent=1))
+    return result
+
+
+def _welch(a: np.ndarray, b: np.ndarray) -> tuple[float, float]:
+    from math import erf, sqrt
+
+    va, vb = a.var(ddof=1) / len(a), b.var(ddof=1) / len(b)
+    t = float((a.mean() - b.mean()) / np.sqrt(va + vb))
+    df = (va + vb) ** 2 / (va ** 2 / (len(a) - 1) + vb ** 2 / (len(b) - 1))
+    try:
+        from scipy import stats
+
+        p = float(2 * stats.t.sf(abs(t), df))
+    except ImportError:  # normal approximation
+        p = float(2 * (1 - 0.5 * (1 + erf(abs(t) / sqrt(2)))))
+    return t, p
+
+
+if __name__ == "__main__":
+    what, *args = sys.argv[1:]
+    {"staleness": staleness, "curves": curves}[what](*args)
