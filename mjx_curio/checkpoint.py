@@ -126,7 +126,7 @@ class Checkpoints:
 
     def restore_raw(self, step: int) -> dict:
         """Checkpoint `step`'s state as nested dicts of arrays on this process's first device, no
-        target structure needed (what analysis.py uses to decode with saved parameters). Reads a
+        target structure needed (what mjx_curio.analysis uses to decode with saved parameters). Reads a
         sweep saved on any number of devices, e.g. on a GPU host, on a one-CPU laptop."""
         path = (self.directory / "state" / str(step) / "default").absolute()  # orbax wants absolute paths
         local = jax.sharding.SingleDeviceSharding(jax.local_devices()[0])

@@ -1,4 +1,4 @@
-"""Reading sweeps and drawing the paper's figures (mjx_curio/analysis.py), on the session's tiny
+"""Reading sweeps and drawing the paper's figures (the package mjx_curio/analysis/), on the session's tiny
 sweeps (tests/conftest.py): the 2-agent `tiny_sweep` (eps, Boltzmann at T=0.5 and 1.5, UCB; 2
 seeds; 200 steps) and the 1-agent `tiny_single_sweep` (eps, UCB; one seed each).
 

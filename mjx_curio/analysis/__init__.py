@@ -1,6 +1,137 @@
-"""Read a sweep directory and redraw the paper's figures from it: all of it is in sweeps.py,
-re-exported here so that `from mjx_curio import analysis` works as before. (Split by job in the
-next commit.)"""
+"""Read a sweep directory and redraw the paper's figures from it.
 
-from mjx_curio.analysis.sweeps import *  # noqa: F401,F403
-from mjx_curio.analysis.sweeps import _quiet_orbax  # noqa: F401  (video.py reads checkpoints with it)
+    from mjx_curio import analysis
+    sweep = analysis.load("runs/paper")             # manifest, metrics, checkpoints
+    sweep.runs, sweep.steps, sweep.metrics["curiosity"]   # [runs], [windows], [runs, windows, agents]
+    ucb = sweep.select(policy="ucb")                 # run indices
+    fig, ax = plt.subplots(); analysis.plot_curiosity(sweep, ax, "ucb")
+
+A sweep (written by `python -m mjx_curio.sweep`, see sweep.py and metrics.py) holds metrics per
+window of `metrics_every` (20) agent steps; `Sweep.metrics` holds the windows that are final
+(`progress.json`), so a sweep still running can be read too. Runs that share a policy and its
+setting (eps, temperature or c) but differ in seed form a `Group`; every figure pools a group's
+seeds into a mean and a 95% confidence band of that mean (Student t, across seeds).
+
+One function per figure of the paper (section 4), each drawing into a matplotlib Axes (or
+Figure) it is given and returning it:
+
+    plot_curiosity                 figs 8, 15, 17, 18, 20: curiosity per agent, raw + moving average
+    plot_curiosity_groups          fig 11: curiosity per policy
+    plot_temperatures              fig 19: Boltzmann temperatures compared
+    plot_single_vs_multi           fig 23: curiosity, single- vs multi-agent sweep
+    plot_vae_single_vs_multi       fig 24: VAE loss, single- vs multi-agent sweep
+    plot_cumulative_interactions   figs 21 (objects), 22 (agent-agent), normalised to the maximum
+    plot_interaction_frequency     figs 9, 14: contacts per object over time, 100-step bins
+    plot_action_histogram          figs 10, 12: actions chosen per agent
+    plot_reconstructions           figs 7, 13: real views and VAE reconstructions, early vs late
+    plot_view_fractions            what each agent looks at over time (objects, other agent)
+    plot_observational             curiosity in windows where an agent only watches the other act
+    plot_losses                    the world model's training losses
+    headline_table                 mean +- sd across seeds per group of the key numbers
+
+and the numbers behind them (`moving_average`, `mean_ci`, `cumulative_interactions`,
+`interaction_frequency`, `action_totals`, `observation_classes`, `reconstructions`), which the
+tests check. Loading needs only NumPy (and orbax for checkpoints); plotting needs matplotlib.
+
+The package, by job; each module imports only those above it (sweeps none; stats and recon
+sweeps; tables sweeps and stats; figures sweeps, stats and recon):
+
+    sweeps    loading: `load`, `find_sweeps`, `load_sweeps`, `pick_single_multi`; `Sweep`, `Run`,
+              `Group`, `SweepError`; the configs a sweep ran with (`learner_config`, `run_config`,
+              `run_specs`) rebuilt from its manifest
+    stats     statistics: `t_quantile_975`, `mean_ci`, `mean_sd`, `moving_average`, `bin_windows`
+              and the numbers the figures draw (`per_agent_vae_loss`, `object_contacts`,
+              `agent_contacts`, `cumulative_interactions`, `interaction_frequency`,
+              `action_totals`, `observation_classes`)
+    recon     reconstructions: `reconstructions` (a run's VAE restored from its checkpoints,
+              JAX) and the `Reconstructions` it returns
+    tables    the headline table: `headline_table` and its `Table` (Markdown, CSV)
+    figures   every `plot_*` function, the colours and labels they share, and saving
+              (`figures_dir`, `save_figure`, `save_text`, `empty_axes`, `slug`)
+
+This module re-exports all of them, so `from mjx_curio import analysis as an; an.load(...)` reads
+as before.
+"""
+
+from __future__ import annotations
+
+from mjx_curio.analysis.figures import (
+    AGENT_COLORS,
+    CURIOSITY_LABEL,
+    FIGURES_DIRNAME,
+    POLICY_COLORS,
+    STEPS_LABEL,
+    TARGET_COLORS,
+    empty_axes,
+    figures_dir,
+    plot_action_histogram,
+    plot_cumulative_interactions,
+    plot_curiosity,
+    plot_curiosity_groups,
+    plot_interaction_frequency,
+    plot_losses,
+    plot_observational,
+    plot_reconstructions,
+    plot_single_vs_multi,
+    plot_temperatures,
+    plot_vae_single_vs_multi,
+    plot_view_fractions,
+    save_figure,
+    save_text,
+    slug,
+)
+from mjx_curio.analysis.recon import Reconstructions, reconstructions
+from mjx_curio.analysis.stats import (
+    OBS_CLASSES,
+    action_totals,
+    agent_contacts,
+    bin_windows,
+    cumulative_interactions,
+    interaction_frequency,
+    mean_ci,
+    mean_sd,
+    moving_average,
+    object_contacts,
+    observation_classes,
+    per_agent_vae_loss,
+    t_quantile_975,
+)
+from mjx_curio.analysis.sweeps import (
+    FORMAT,
+    POLICY_LABELS,
+    SETTINGS,
+    SWEEP_OUTPUTS,
+    Group,
+    Run,
+    Sweep,
+    SweepError,
+    _quiet_orbax,  # video.py reads checkpoints with it
+    find_sweeps,
+    learner_config,
+    load,
+    load_sweeps,
+    pick_single_multi,
+    run_config,
+    run_specs,
+)
+from mjx_curio.analysis.tables import Table, headline_table
+
+__all__ = [
+    # sweeps
+    "FORMAT", "POLICY_LABELS", "SETTINGS", "SWEEP_OUTPUTS", "Group", "Run", "Sweep", "SweepError", "find_sweeps",
+    "learner_config", "load", "load_sweeps", "pick_single_multi", "run_config", "run_specs",
+    # stats
+    "OBS_CLASSES", "action_totals", "agent_contacts", "bin_windows", "cumulative_interactions",
+    "interaction_frequency", "mean_ci", "mean_sd", "moving_average", "object_contacts", "observation_classes",
+    "per_agent_vae_loss", "t_quantile_975",
+    # recon
+    "Reconstructions", "reconstructions",
+    # tables
+    "Table", "headline_table",
+    # figures
+    "AGENT_COLORS", "CURIOSITY_LABEL", "FIGURES_DIRNAME", "POLICY_COLORS", "STEPS_LABEL", "TARGET_COLORS",
+    "empty_axes", "figures_dir", "plot_action_histogram", "plot_cumulative_interactions", "plot_curiosity",
+    "plot_curiosity_groups", "plot_interaction_frequency", "plot_losses", "plot_observational",
+    "plot_reconstructions", "plot_single_vs_multi", "plot_temperatures", "plot_vae_single_vs_multi",
+    "plot_view_fractions", "save_figure", "save_text", "slug",
+]

@@ -1,0 +1,431 @@
+"""Figures: one function per figure of the paper (section 4), each drawing into a matplotlib
+Axes (or Figure) it is given and returning it (the list is in the package docstring), the
+colours and labels they share, and saving figures and text under a sweep's `figures/`
+(`figures_dir`, `save_figure`, `save_text`, `empty_axes`, `slug`). matplotlib is imported only
+where a colour map is needed; imports `sweeps`, `stats` and `recon`.
+"""
+
+from __future__ import annotations
+
+import pathlib
+import re
+import warnings
+from typing import Any, Iterable, Sequence
+
+import numpy as np
+
+from mjx_curio.analysis.recon import Reconstructions, reconstructions
+from mjx_curio.analysis.stats import (
+    OBS_CLASSES,
+    action_totals,
+    bin_windows,
+    cumulative_interactions,
+    interaction_frequency,
+    mean_ci,
+    moving_average,
+    observation_classes,
+    per_agent_vae_loss,
+)
+from mjx_curio.analysis.sweeps import SWEEP_OUTPUTS, Group, Sweep, SweepError
+
+FIGURES_DIRNAME = "figures"  # where the notebook saves figures inside a sweep directory (never written by a sweep)
+
+# The paper's colours in figs 21 and 22: eps blue, UCB orange, Boltzmann green.
+POLICY_COLORS = {"eps": "tab:blue", "ucb": "tab:orange", "boltzmann": "tab:green"}
+AGENT_COLORS = ("#1e9e3c", "#8a3fb0")  # the green and the purple cube
+TARGET_COLORS = {"pyramid": "#ff8000", "cylinder": "#d62020", "sphere": "#e0c000", "disc": "#2050d0",
+                 "other_agent": "#707070"}
+STEPS_LABEL = "agent steps"
+CURIOSITY_LABEL = "curiosity reward (squared latent distance)"
+
+
+# ----------------------------------------------------------------------------------- plotting
+
+
+def _group_list(sweep: Sweep, groups) -> list[Group]:
+    if groups is None:
+        return sweep.groups()
+    if isinstance(groups, (str, Group, int, np.integer)):
+        return [sweep.group(groups)]
+    return [sweep.group(g) for g in groups]
+
+
+def _band(ax, x, lo, hi, color, label=None, floor: float | None = 0.0):
+    """A 95% confidence band; clipped at `floor` (the quantities drawn with the default 0 cannot
+    be negative)."""
+    if np.any(np.isfinite(lo)):
+        if floor is not None:
+            lo = np.maximum(lo, floor)
+        ax.fill_between(x, lo, hi, color=color, alpha=0.2, linewidth=0, label=label)
+
+
+def _finish(ax, title, xlabel, ylabel, legend=True, loc="best"):
+    ax.set_title(title, fontsize=10)
+    ax.set_xlabel(xlabel)
+    ax.set_ylabel(ylabel)
+    ax.grid(True, alpha=0.3)
+    if legend and ax.get_legend_handles_labels()[0]:
+        ax.legend(fontsize=7, loc=loc)
+    return ax
+
+
+def _group_colors(gs: Sequence[Group]) -> list:
+    """One colour per group: the policy's (figs 21, 22: eps blue, UCB orange, Boltzmann green),
+    in shades of it when a policy has several settings."""
+    import matplotlib
+
+    maps = {"eps": "Blues", "ucb": "Oranges", "boltzmann": "Greens"}
+    out = []
+    for i, g in enumerate(gs):
+        same = [h for h in gs if h.policy == g.policy]
+        if len(same) == 1 or g.policy not in maps:
+            out.append(POLICY_COLORS.get(g.policy, f"C{i}"))
+        else:
+            j = same.index(g)
+            out.append(matplotlib.colormaps[maps[g.policy]](0.45 + 0.5 * j / (len(same) - 1)))
+    return out
+
+
+def plot_curiosity(sweep: Sweep, ax, group: Any = None, window: int = 50, raw: bool = True,
+                   metric: str = "curiosity_sample"):
+    """Curiosity reward per agent over training for one group (figs 8, 15, 17, 18, 20).
+
+    Thin line: the raw reward sampled every `metrics_every` (20) steps (the paper's blue line;
+    with several seeds, their mean). Thick line: its trailing moving average over `window`
+    points (the paper's red line), mean over seeds, with the 95% confidence band across seeds.
+    metric="curiosity" uses each window's mean reward instead of its last step's."""
+    g = sweep.group(group)
+    x = sweep.steps
+    for a in range(sweep.n_agents):
+        v = sweep.metrics[metric][g.indices, :, a]
+        color = AGENT_COLORS[a % len(AGENT_COLORS)] if sweep.n_agents > 1 else "tab:red"
+        name = sweep.agent_label(a)
+        if raw:
+            raw_color = color if sweep.n_agents > 1 else "tab:blue"
+            with warnings.catch_warnings():
+                warnings.simplefilter("ignore", RuntimeWarning)
+                ax.plot(x, np.nanmean(v, axis=0), color=raw_color, alpha=0.3, linewidth=0.7,
+                        label=f"{name}: raw, every {sweep.metrics_every} steps")
+        mean, lo, hi, _ = mean_ci(moving_average(v, window, axis=1))
+        ax.plot(x, mean, color=color, linewidth=2, label=f"{name}: moving average ({window} points)")
+        _band(ax, x, lo, hi, color, label="95% CI across seeds" if a == 0 else None)
+    agents = "per agent" if sweep.n_agents > 1 else "single agent"
+    return _finish(ax, f"Curiosity reward, {agents}: {g.label}, {g.seeds_text}", STEPS_LABEL, CURIOSITY_LABEL)
+
+
+def plot_curiosity_groups(sweep: Sweep, ax, groups=None, window: int = 50, colors=None, title=None,
+                          metric: str = "curiosity_sample"):
+    """Curiosity reward (mean of the agents) per group: moving average over `window` points,
+    mean over seeds, 95% confidence band across seeds (fig 11: one curve per policy)."""
+    gs = _group_list(sweep, groups)
+    x = sweep.steps
+    colors = colors if colors is not None else _group_colors(gs)
+    for i, g in enumerate(gs):
+        v = sweep.metrics[metric][g.indices].mean(axis=2)  # agents averaged, per run
+        mean, lo, hi, _ = mean_ci(moving_average(v, window, axis=1))
+        color = colors[i]
+        ax.plot(x, mean, color=color, linewidth=2, label=f"{g.label}, {g.seeds_text}")
+        _band(ax, x, lo, hi, color)
+    who = "mean of both agents" if sweep.n_agents > 1 else "single agent"
+    title = title or f"Curiosity reward per policy ({who}; moving average of {window} points, 95% CI band across seeds)"
+    return _finish(ax, title, STEPS_LABEL, CURIOSITY_LABEL)
+
+
+def plot_temperatures(sweep: Sweep, ax, window: int = 50):
+    """Boltzmann temperatures compared: curiosity per temperature (fig 19)."""
+    gs = sorted(sweep.groups("boltzmann"), key=lambda g: g.value)
+    if not gs:
+        raise SweepError(f"{sweep.path} has no Boltzmann runs")
+    import matplotlib
+
+    cmap = matplotlib.colormaps["viridis"]
+    colors = [cmap(i / max(1, len(gs) - 1) * 0.85) for i in range(len(gs))]
+    who = "mean of both agents" if sweep.n_agents > 1 else "single agent"
+    return plot_curiosity_groups(sweep, ax, gs, window, colors,
+                                 title=f"Boltzmann policy: curiosity per temperature T ({who}; moving average of "
+                                       f"{window} points, 95% CI band)")
+
+
+def _policy_group(sweep: Sweep, policy: str) -> Group:
+    gs = sweep.groups(policy)
+    if not gs:
+        raise SweepError(f"{sweep.path} has no {policy!r} runs; policies: {', '.join(sorted({r.policy for r in sweep.runs}))}")
+    return gs[0]
+
+
+def _check_pair(single: Sweep, multi: Sweep):
+    if single.n_agents != 1:
+        raise SweepError(f"{single.path} is not a single-agent sweep ({single.n_agents} agents)")
+    if multi.n_agents < 2:
+        raise SweepError(f"{multi.path} is not a multi-agent sweep ({multi.n_agents} agent)")
+
+
+def plot_single_vs_multi(single: Sweep, multi: Sweep, ax, policy: str = "ucb", window: int = 50):
+    """Curiosity of the single agent against each agent of the multi-agent sweep (fig 23):
+    moving averages over `window` points, means over seeds with 95% bands."""
+    _check_pair(single, multi)
+    gs, gm = _policy_group(single, policy), _policy_group(multi, policy)
+    v = single.metrics["curiosity_sample"][gs.indices, :, 0]
+    mean, lo, hi, _ = mean_ci(moving_average(v, window, axis=1))
+    ax.plot(single.steps, mean, color="black", linewidth=2, label=f"single agent ({gs.seeds_text}, {single.image} px)")
+    _band(ax, single.steps, lo, hi, "black")
+    for a in range(multi.n_agents):
+        v = multi.metrics["curiosity_sample"][gm.indices, :, a]
+        mean, lo, hi, _ = mean_ci(moving_average(v, window, axis=1))
+        c = AGENT_COLORS[a % len(AGENT_COLORS)]
+        ax.plot(multi.steps, mean, color=c, linewidth=2,
+                label=f"multi-agent: {multi.agent_label(a)} ({gm.seeds_text}, {multi.image} px)")
+        _band(ax, multi.steps, lo, hi, c)
+    return _finish(ax, f"Curiosity reward, single- vs multi-agent: {gm.label} (moving average of {window} points, "
+                       "95% CI band)", STEPS_LABEL, CURIOSITY_LABEL)
+
+
+def plot_vae_single_vs_multi(single: Sweep, multi: Sweep, ax, policy: str = "ucb", window: int = 50, raw: bool = True):
+    """The VAE's loss in the single- and the multi-agent sweep (fig 24), per image (the
+    multi-agent loss of eq. 5 sums both agents' views; it is halved here so the two compare)."""
+    _check_pair(single, multi)
+    for sw, color, who in ((single, "black", "single agent"), (multi, "tab:purple", "multi-agent")):
+        g = _policy_group(sw, policy)
+        v = per_agent_vae_loss(sw)[g.indices]
+        if raw:
+            with warnings.catch_warnings():
+                warnings.simplefilter("ignore", RuntimeWarning)
+                ax.plot(sw.steps, np.nanmean(v, axis=0), color=color, alpha=0.3, linewidth=0.7)
+        mean, lo, hi, _ = mean_ci(moving_average(v, window, axis=1))
+        ax.plot(sw.steps, mean, color=color, linewidth=2,
+                label=f"{who}: {g.label}, {g.seeds_text}, {sw.image} px")
+        _band(ax, sw.steps, lo, hi, color)
+    return _finish(ax, f"VAE loss, single- vs multi-agent (thin: every {multi.metrics_every} steps; thick: moving "
+                       f"average of {window} points, 95% CI band)", STEPS_LABEL,
+                   "VAE loss per image (nats: squared pixel error sum + KL)")
+
+
+def plot_cumulative_interactions(sweep: Sweep, ax, kind: str = "object", groups=None):
+    """Cumulative interactions per policy, as % of the global maximum (fig 21: objects, both
+    agents summed; fig 22: agent-agent contacts). Bands: 95% CI across seeds."""
+    gs = _group_list(sweep, groups)
+    data = cumulative_interactions(sweep, kind, gs)
+    top = data.pop("_max")
+    colors = _group_colors(gs)
+    for i, (label, d) in enumerate(data.items()):
+        g = d["group"]
+        color = colors[i]
+        ax.plot(d["steps"], 100 * d["mean"], color=color, linewidth=2, label=f"{label}, {g.seeds_text}")
+        _band(ax, d["steps"], 100 * d["low"], 100 * d["high"], color)
+    what = "contact steps, both agents summed" if kind == "object" else "steps with the agents touching"
+    title = ("Cumulative agent-object interactions per policy" if kind == "object"
+             else "Cumulative agent-agent interactions per policy")
+    note = f"100% = {top:,.0f} {what}" if top > 0 else f"no {what} recorded"
+    if kind == "agent" and sweep.n_agents == 1:
+        note = "single-agent sweep: no other agent to touch"
+    ax.set_ylim(-2, 110)  # bands above 110% (few seeds) are cut
+    return _finish(ax, f"{title}\n({note})", STEPS_LABEL,
+                   "cumulative interactions (% of the global maximum;\nmean over seeds, 95% CI band)", loc="upper left")
+
+
+def plot_interaction_frequency(sweep: Sweep, ax, group: Any = None, every: int = 100, agent: int | None = None):
+    """How often the agent(s) touch each object over time, averaged over bins of `every` steps
+    (figs 9, 14), mean over seeds with a 95% band."""
+    g = sweep.group(group)
+    steps, f = interaction_frequency(sweep, g, every, agent)
+    for k, obj in enumerate(sweep.objects):
+        mean, lo, hi, _ = mean_ci(f[:, :, k])
+        c = TARGET_COLORS.get(obj, f"C{k}")
+        ax.plot(steps, mean, color=c, linewidth=1.5, marker="." if len(steps) < 30 else None, label=obj)
+        _band(ax, steps, lo, hi, c)
+    who = sweep.agent_label(agent) if agent is not None else ("both agents" if sweep.n_agents > 1 else "agent")
+    return _finish(ax, f"Agent-object interactions over time, {who}: {g.label}, {g.seeds_text}",
+                   STEPS_LABEL, f"share of steps touching the object\n(averaged over {every} steps)")
+
+
+def plot_action_histogram(sweep: Sweep, ax, group: Any = None):
+    """How often each agent chose each action over the whole run (figs 10, 12); bars are means
+    over seeds, error bars 95% CIs."""
+    g = sweep.group(group)
+    tot = action_totals(sweep, g).astype(float)  # [n, agents, actions]
+    n_a = sweep.n_agents
+    width = 0.8 / n_a
+    x = np.arange(len(sweep.actions))
+    for a in range(n_a):
+        mean, lo, hi, _ = mean_ci(tot[:, a])
+        err = np.where(np.isfinite(lo), np.vstack([mean - np.maximum(lo, 0), hi - mean]), 0.0)
+        ax.bar(x + (a - (n_a - 1) / 2) * width, mean, width, yerr=err if g.n > 1 else None, capsize=2,
+               color=AGENT_COLORS[a % len(AGENT_COLORS)] if n_a > 1 else "tab:blue", label=sweep.agent_label(a))
+    ax.set_xticks(x)
+    ax.set_xticklabels([s.replace("_", "\n") for s in sweep.actions], fontsize=8)
+    return _finish(ax, f"Actions chosen over {sweep.steps_done:,} steps: {g.label}, {g.seeds_text}", "action",
+                   "times chosen (agent steps, mean over seeds)", legend=n_a > 1)
+
+
+def plot_view_fractions(sweep: Sweep, ax, group: Any = None, agent: int = 0, every: int = 100):
+    """What an agent looks at over time: the share of its view's pixels showing each object and
+    the other agent, stacked, averaged over bins of `every` steps and over seeds (the rest of the
+    view is floor, walls and sky)."""
+    g = sweep.group(group)
+    v = sweep.metrics["view_fraction"][g.indices, :, agent]  # [n, W, targets]
+    steps, b = bin_windows(sweep, v, every, reduce="mean")
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", RuntimeWarning)
+        m = np.nanmean(b, axis=0)  # [bins, targets]
+    targets = list(sweep.view_targets)
+    if sweep.n_agents == 1:
+        targets, m = targets[:-1], m[:, :-1]
+    labels = [t.replace("_", " ") for t in targets]
+    ax.stackplot(steps, 100 * np.nan_to_num(m.T), labels=labels,
+                 colors=[TARGET_COLORS.get(t, f"C{i}") for i, t in enumerate(targets)], alpha=0.85)
+    return _finish(ax, f"What the {sweep.agent_label(agent)} looks at: {g.label}, {g.seeds_text}",
+                   STEPS_LABEL, f"share of its view (% of pixels, mean over {every} steps;\nthe rest: floor, walls, sky)",
+                   loc="upper left")
+
+
+def plot_observational(sweep: Sweep, ax, window: int = 50):
+    """Curiosity when an agent only watches the other agent act, against when it acts itself
+    or nothing happens (per 20-step window, relative to its moving average; bars: mean over
+    runs of every group, error bars 95% CI across runs)."""
+    d = observation_classes(sweep, window)
+    mean, lo, hi, n = mean_ci(d["per_run"])
+    x = np.arange(len(OBS_CLASSES))
+    err = np.where(np.isfinite(lo), np.vstack([mean - lo, hi - mean]), 0.0)  # excess: may be negative
+    colors = ["tab:red", "tab:purple", "tab:gray", "lightgray"]
+    ax.bar(x, np.nan_to_num(mean), yerr=err, capsize=3, color=colors)
+    ax.axhline(0, color="black", linewidth=0.8)
+    ax.set_xticks(x)
+    ax.set_xticklabels([f"{c}\n({k:,} windows)" for c, k in zip(_wrap_all(OBS_CLASSES, 22), d["count"])], fontsize=7)
+    return _finish(ax, f"Curiosity by what the agent did or saw in each {sweep.metrics_every}-step window\n"
+                       f"(all {sweep.n_runs} runs, both agents; relative to the agent's moving average of {window} windows)",
+                   "in the window, the agent ...", "curiosity above its moving average\n(squared latent distance)",
+                   legend=False)
+
+
+def plot_losses(sweep: Sweep, axes, groups=None, window: int = 50):
+    """The world model's training losses per group (moving average, 95% band): the VAE loss per
+    image, the MDN-RNN negative log-likelihood, the self-models' loss per agent. `axes`: 3 Axes."""
+    gs = _group_list(sweep, groups)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", RuntimeWarning)
+        self_loss = np.nanmean(sweep.metrics["self_loss_agents"], axis=2)
+    series = (  # (y label, what, values, lowest possible value for the bands)
+        ("VAE loss per image (nats)", "VAE (eq. 5, per image)", per_agent_vae_loss(sweep), 0.0),
+        ("MDN-RNN NLL per transition (nats)", "MDN-RNN (eq. 6)", sweep.metrics["nll"], None),
+        ("self-model loss per agent\n(squared curiosity error)", "self-models (eq. 4)", self_loss, 0.0),
+    )
+    colors = _group_colors(gs)
+    for ax, (ylabel, what, v, floor) in zip(axes, series):
+        for i, g in enumerate(gs):
+            mean, lo, hi, _ = mean_ci(moving_average(v[g.indices], window, axis=1))
+            color = colors[i]
+            ax.plot(sweep.steps, mean, color=color, linewidth=1.5, label=f"{g.label}, {g.seeds_text}")
+            _band(ax, sweep.steps, lo, hi, color, floor=floor)
+        _finish(ax, f"{what} loss (moving average of {window} windows)", STEPS_LABEL, ylabel)
+    return axes
+
+
+def plot_reconstructions(sweep: Sweep, fig, run: int | str = 0, steps: Sequence[int] | None = None, n_frames: int = 8,
+                         rec: Reconstructions | None = None):
+    """Real views (top row) and run `run`'s VAE reconstructions of them after an early and a
+    late checkpoint (one row per checkpoint), figs 7 and 13."""
+    rec = rec or reconstructions(sweep, run, steps, n_frames)
+    rows = 1 + len(rec.steps)
+    n = len(rec.frames)
+    axes = fig.subplots(rows, n, squeeze=False)
+    for j in range(n):
+        s, i, a = rec.sources[j]
+        who = "" if sweep.n_agents == 1 else f", {sweep.agent_names[a]}"
+        axes[0, j].imshow(rec.frames[j], interpolation="nearest")
+        axes[0, j].set_title(f"run {i}{who}\nstep {s:,}", fontsize=7)
+        for k, st in enumerate(rec.steps):
+            axes[k + 1, j].imshow(rec.decoded[st][j], interpolation="nearest")
+    for row in axes:
+        for ax in row:
+            ax.set_xticks([])
+            ax.set_yticks([])
+    axes[0, 0].set_ylabel("real view", fontsize=8)
+    for k, st in enumerate(rec.steps):
+        axes[k + 1, 0].set_ylabel(f"VAE after\n{st:,} steps", fontsize=8)
+    fig.suptitle(f"VAE reconstructions, {rec.run.name}: the agents' real {sweep.image}x{sweep.image} views (top; each "
+                 f"from the checkpoint named) encoded and decoded\nby this run's VAE restored from checkpoints at "
+                 f"{' and '.join(f'{s:,}' for s in rec.steps)} agent steps", fontsize=9)
+    return fig
+
+
+# ---------------------------------------------------------------------------------- saving
+
+
+def figures_dir(path: str | pathlib.Path, create: bool = True) -> pathlib.Path:
+    """Where figures of the sweep (or directory of sweeps) at `path` go: `<path>/figures`, a
+    name no sweep writes."""
+    d = pathlib.Path(path).expanduser() / FIGURES_DIRNAME
+    if create:
+        d.mkdir(parents=True, exist_ok=True)
+    return d
+
+
+def empty_axes(fig) -> list[str]:
+    """Titles of the visible axes of `fig` that show nothing: no line with a finite point, no
+    bar, band, area or image."""
+    empty = []
+    for ax in fig.axes:
+        if not ax.get_visible():
+            continue
+        lines = any(np.isfinite(np.asarray(ln.get_ydata(), float)).any() for ln in ax.lines)
+        if not (lines or ax.collections or ax.patches or ax.images):
+            empty.append(ax.get_title() or f"axes {fig.axes.index(ax)}")
+    return empty
+
+
+def save_figure(fig, directory: str | pathlib.Path, name: str, dpi: int = 110, check: bool = True) -> pathlib.Path:
+    """Save `fig` as `<directory>/<name>.png` (name made file-safe). With `check`, raise
+    SweepError if an axes shows nothing. Refuses to write inside a sweep's own outputs
+    (metrics/, checkpoints/, manifest.json, progress.json)."""
+    directory = pathlib.Path(directory)
+    if check and empty_axes(fig):
+        raise SweepError(f"figure {name!r} has empty axes: {'; '.join(empty_axes(fig))}")
+    _check_not_sweep_output(directory)
+    directory.mkdir(parents=True, exist_ok=True)
+    path = directory / f"{slug(name)}.png"
+    fig.savefig(path, dpi=dpi, bbox_inches="tight")
+    return path
+
+
+def save_text(text: str, directory: str | pathlib.Path, name: str) -> pathlib.Path:
+    directory = pathlib.Path(directory)
+    _check_not_sweep_output(directory)
+    directory.mkdir(parents=True, exist_ok=True)
+    path = directory / name
+    path.write_text(text)
+    return path
+
+
+def _check_not_sweep_output(directory: pathlib.Path) -> None:
+    d = directory.resolve()
+    for parent in (d, *d.parents):
+        if (parent / "manifest.json").is_file() and parent != d:
+            rel = d.relative_to(parent).parts
+            if rel and rel[0] in SWEEP_OUTPUTS:
+                raise SweepError(f"refusing to write into {directory}: it is part of the sweep {parent}'s own output")
+    if (d / "manifest.json").is_file():
+        raise SweepError(f"refusing to write figures into the sweep directory {directory} itself; "
+                         f"use {directory / FIGURES_DIRNAME}")
+
+
+def slug(text: str) -> str:
+    text = text.replace("ε", "eps").replace("±", "pm")
+    return re.sub(r"[^A-Za-z0-9._-]+", "-", text).strip("-").lower() or "figure"
+
+
+# ---------------------------------------------------------------------------------- helpers
+
+
+def _wrap(text: str, width: int) -> str:
+    words, lines, cur = text.split(), [], ""
+    for w in words:
+        if cur and len(cur) + 1 + len(w) > width:
+            lines.append(cur)
+            cur = w
+        else:
+            cur = f"{cur} {w}".strip()
+    return "\n".join(lines + [cur])
+
+
+def _wrap_all(texts: Iterable[str], width: int) -> list[str]:
+    return [_wrap(t, width) for t in texts]
