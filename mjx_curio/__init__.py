@@ -10,8 +10,8 @@ _FLAGS = {
     "xla_cpu_enable_concurrency_optimized_scheduler": "false",
     # YNNPACK's dot kernels sum in an order that depends on how many threads the device has,
     # so the same runs gave different numbers on one device and on two (forced host devices
-    # split the cores). Without them a device's runs are bit-identical to a one-device sweep
-    # of the same runs (run.py says what differs with other numbers of runs a device).
+    # split the cores). Without them one fewer source of such differences remains (run.py says
+    # what still differs between device counts).
     "xla_cpu_experimental_ynn_fusion_type": "",
 }
 _given = _os.environ.get("XLA_FLAGS", "")

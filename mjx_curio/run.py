@@ -20,10 +20,11 @@ axis is traversed is `RunConfig.runs_loop`:
   alone to float rounding (about 1e-6 after one update), so trajectories can part after many
   steps where an argmax flips.
 Across devices the runs axis is sharded with `shard_map` (program.py): each device advances its
-own runs, with no communication. A device holding k runs runs the program of a k-run sweep on
-one device, so its runs give the same numbers as that sweep's, bit for bit; against a sweep with
-another number of runs a device, XLA compiles another program whose float rounding may differ in
-the last bit (MJX's contact solver among others), and such differences grow along a chaotic run.
+own runs, with no communication, so a run's random stream, policy and settings are the same on
+any number of devices. Its float results are not bit for bit: the sharded program is another
+compiled program (measured: even against a one-device sweep of exactly the runs one device
+holds), whose rounding may differ in the last bit (MJX's contact solver among others), and such
+differences grow along a chaotic run.
 
 Ordering within a step t (carry_t = LSTM state before step t, z_t = encoding of o_t):
     q_t = self-models(z_t, h_t); a_t = policy(q_t); replay <- (o_t, z_t, a_t, carry_t)
