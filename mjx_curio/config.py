@@ -195,6 +195,32 @@ class Text:
 
 
 @dataclass(frozen=True)
+class AutoOr:
+    """"auto" (the program decides; its help says how) or a value of another kind."""
+
+    item: Any
+
+    def check(self, name: str, value: Any) -> Any:
+        if value == "auto":
+            return value
+        try:
+            return self.item.check(name, value)
+        except ConfigError as err:
+            raise ConfigError(f"{err}; or auto") from None
+
+    def parse(self, name: str, text: str) -> Any:
+        if text == "auto":
+            return text
+        try:
+            return self.item.parse(name, text)
+        except ConfigError as err:
+            raise ConfigError(f"{err}; or auto") from None
+
+    def show(self, value: Any) -> str:
+        return value if value == "auto" else self.item.show(value)
+
+
+@dataclass(frozen=True)
 class ListOf:
     """A comma-separated list (`policies=eps,ucb`); its value is always a non-empty tuple."""
 
@@ -428,6 +454,9 @@ class SweepConfig:
                           Choice(("auto",) + RUNS_LOOPS), group=_RUN)
     distributed: str = knob("auto", "jax.distributed.initialize() first: true, false, auto (when a cluster is detected)",
                             Choice(("auto", "true", "false")), resume_free=True, group=_RUN)
+    host_devices: Any = knob("auto", "CPU devices the runs are spread over: auto (one per physical core, at most one "
+                             "per run; a resumed sweep keeps its count) or a number", AutoOr(Int(1)),
+                             resume_free=True, group=_RUN)
     compile_cache: str = knob("~/.cache/mjx_curio/xla", "persistent XLA compilation cache directory, or none", Text(),
                               resume_free=True, group=_RUN)
     progress: bool = knob(True, "show a progress line", Bool(), resume_free=True, group=_RUN)

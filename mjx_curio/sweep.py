@@ -54,6 +54,11 @@ def main(argv=None) -> int:
 def execute(p: Plan) -> int:
     from mjx_curio import distributed
 
+    try:
+        _spread_over_cores(p)
+    except ConfigError as err:
+        print(f"error: {err}", file=sys.stderr)
+        return 2
     lead = distributed.rank_from_env() == 0
     lock = None
     if lead:
@@ -104,6 +109,20 @@ def _main_thread() -> bool:
     import threading
 
     return threading.current_thread() is threading.main_thread()
+
+
+def _spread_over_cores(p: Plan) -> None:
+    """Fix the CPU device count before JAX starts (host_devices.py): a resumed sweep made on
+    the CPU by one process keeps the count its padding runs were made for."""
+    from mjx_curio import host_devices
+
+    saved = None
+    if p.resume:
+        device = read_manifest(p.out).get("device", {})
+        if device.get("platform") == "cpu" and device.get("processes", 1) == 1:
+            saved = device.get("count")
+    requested = p.values["host_devices"]
+    host_devices.apply(host_devices.choose(requested, len(p.runs), saved), requested)
 
 
 def _execute(p: Plan, stop: _StopSignals) -> int:

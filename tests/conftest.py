@@ -22,6 +22,12 @@ os.environ.setdefault("MUJOCO_GL", "osmesa")
 # session (set before JAX initialises) makes each program compile once.
 CACHE = pathlib.Path(os.environ.setdefault("JAX_COMPILATION_CACHE_DIR", tempfile.mkdtemp(prefix="mjx_curio_xla_")))
 
+# One CPU device for every JAX program of the session, in this process and in the sweeps it starts
+# (host_devices=auto honours a count set in XLA_FLAGS): the tests' reference results are one
+# device's, and programs compiled for one device count are shared through the cache. The
+# sharding tests ask for two devices explicitly (host_devices=2).
+os.environ["XLA_FLAGS"] = (os.environ.get("XLA_FLAGS", "") + " --xla_force_host_platform_device_count=1").strip()
+
 # The tiny sweep: image 16, 2 seeds x (eps, boltzmann at T=0.5 and 1.5, ucb) = 8 runs, 200 steps, checkpoints at 100 and 200.
 TINY_SWEEP = ("seeds=2", "temperature=0.5,1.5", "steps=200", "image=16", "buffer=500", "chunk=100", "checkpoint_every=100",
               "keep_steps=100", "keep_every=0", "progress=false")
@@ -133,10 +139,8 @@ _sharded: dict = {}
 
 
 def _start_sharded_sweep(out: pathlib.Path) -> subprocess.Popen:
-    flags = os.environ.get("XLA_FLAGS", "") + " --xla_force_host_platform_device_count=2"
-    return subprocess.Popen([sys.executable, "-m", "mjx_curio.sweep", *TINY_SWEEP, f"out={out}", f"compile_cache={CACHE}"],
-                            stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True,
-                            env=dict(os.environ, XLA_FLAGS=flags))
+    return subprocess.Popen([sys.executable, "-m", "mjx_curio.sweep", *TINY_SWEEP, "host_devices=2", f"out={out}",
+                             f"compile_cache={CACHE}"], stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True)
 
 
 def pytest_collection_finish(session):

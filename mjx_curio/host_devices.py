@@ -1,0 +1,89 @@
+"""How many JAX devices the CPU is split into: every physical core advances its own runs.
+
+XLA runs one CPU device's program on a shared thread pool, but a run's learner update is a chain
+of small convolutions and matmuls that keeps two cores only partly busy. Split into as many host
+devices as there are physical cores, the sweep's runs axis is sharded over them (program.py) and
+each core steps its own runs side by side; bench.py's `what=sweep` measures the gain.
+
+The count must be fixed before JAX starts its CPU backend (XLA reads
+`--xla_force_host_platform_device_count` once), so the sweep and the bench call `apply` after
+reading their command line and before their first JAX computation. The rule (`choose`):
+- a number given on the command line wins (`host_devices=1`: one device, the old behaviour);
+- else a count the user put in XLA_FLAGS themselves;
+- else, resuming a sweep made on the CPU, the count it was made with (its checkpoints hold as
+  many padding runs as that count required; see program.py);
+- else one device per physical core, but never more devices than runs: a device with only a
+  padding run would compute it for nothing, and the run alone would lose the cores it could use.
+Runs that do not divide evenly are padded with copies of run 0 whose results are dropped
+(program.py), so the sweep takes as long as ceil(runs / devices) runs on one core.
+On a GPU the flag changes nothing that the sweep uses: it only splits the host CPU platform.
+"""
+
+from __future__ import annotations
+
+import os
+import re
+
+from mjx_curio.config import ConfigError
+
+FLAG = "xla_force_host_platform_device_count"
+
+
+def physical_cores() -> int:
+    """Physical cores this process may run on (hyperthreads share a core's FMA units, so they
+    are not counted twice), from Linux's CPU topology; the logical count elsewhere."""
+    try:
+        cpus = sorted(os.sched_getaffinity(0))
+    except AttributeError:  # not Linux
+        return max(1, os.cpu_count() or 1)
+    cores = set()
+    for cpu in cpus:
+        base = f"/sys/devices/system/cpu/cpu{cpu}/topology/"
+        try:
+            with open(base + "core_id") as f, open(base + "physical_package_id") as g:
+                cores.add((g.read().strip(), f.read().strip()))
+        except OSError:
+            cores.add(("cpu", str(cpu)))
+    return max(1, len(cores))
+
+
+def from_xla_flags(flags: str | None = None) -> int | None:
+    """The host device count set in XLA_FLAGS, or None."""
+    found = re.findall(rf"--{FLAG}=(\d+)", os.environ.get("XLA_FLAGS", "") if flags is None else flags)
+    return int(found[-1]) if found else None
+
+
+def choose(requested, n_runs: int, saved: int | None = None) -> int:
+    """The host device count for a sweep of `n_runs` runs (see the module docstring).
+
+    requested: "auto" or a positive int (the `host_devices` key); saved: the CPU device count a
+    resumed sweep was made with (None for a new sweep or one made on another platform)."""
+    if requested != "auto":
+        return int(requested)
+    given = from_xla_flags()
+    if given is not None:
+        return given
+    if saved is not None:
+        return saved
+    return max(1, min(physical_cores(), n_runs))
+
+
+def apply(count: int, requested="auto") -> int:
+    """Make JAX's CPU platform `count` devices; returns the count JAX will have.
+
+    Before JAX's backend starts this sets XLA_FLAGS. After it started (a test, a notebook that
+    already computed something) the count can no longer change: with `requested="auto"` the
+    backend's own count is kept, while a count the user asked for explicitly is an error."""
+    import jax._src.xla_bridge as xla_bridge
+
+    if xla_bridge.backends_are_initialized():
+        import jax
+
+        have = len(jax.devices("cpu"))
+        if requested != "auto" and have != count:
+            raise ConfigError(f"host_devices={count} cannot be applied: JAX already started with {have} CPU "
+                              f"device(s) in this process; set it before the first JAX computation")
+        return have
+    flags = re.sub(rf"\s*--{FLAG}=\d+", "", os.environ.get("XLA_FLAGS", "")).strip()
+    os.environ["XLA_FLAGS"] = f"{flags} --{FLAG}={count}".strip()
+    return count

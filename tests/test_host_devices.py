@@ -1,0 +1,62 @@
+"""The CPU device count a sweep chooses (mjx_curio/host_devices.py), and its key.
+
+Whether the runs of a sweep spread over devices give the runs' own results is asked by the
+sharding test in test_sweep.py (its sweep asks for host_devices=2); here: which count is chosen,
+from what, and that a bad value is refused before any work."""
+
+import os
+
+import pytest
+
+from mjx_curio import host_devices
+from mjx_curio.config import ConfigError, SweepConfig
+
+
+@pytest.fixture
+def no_flag(monkeypatch):
+    """XLA_FLAGS without a host device count (the session's own sets one: conftest.py)."""
+    flags = os.environ.get("XLA_FLAGS", "").replace(f"--{host_devices.FLAG}=1", "")
+    monkeypatch.setenv("XLA_FLAGS", flags)
+
+
+def test_physical_cores_counts_each_core_once():
+    cores = host_devices.physical_cores()
+    assert 1 <= cores <= len(os.sched_getaffinity(0))
+
+
+def test_auto_is_one_device_per_core_and_never_more_than_the_runs(no_flag, monkeypatch):
+    monkeypatch.setattr(host_devices, "physical_cores", lambda: 8)
+    assert host_devices.choose("auto", n_runs=24) == 8
+    assert host_devices.choose("auto", n_runs=3) == 3  # a device with only padding would idle a run's cores
+    assert host_devices.choose("auto", n_runs=1) == 1
+
+
+def test_what_the_user_set_wins(no_flag, monkeypatch):
+    monkeypatch.setattr(host_devices, "physical_cores", lambda: 8)
+    assert host_devices.choose(2, n_runs=24) == 2  # the key
+    monkeypatch.setenv("XLA_FLAGS", f"--foo=1 --{host_devices.FLAG}=5")
+    assert host_devices.from_xla_flags() == 5
+    assert host_devices.choose("auto", n_runs=24) == 5  # their own XLA_FLAGS
+    assert host_devices.choose(3, n_runs=24) == 3  # the key over XLA_FLAGS
+
+
+def test_a_resumed_sweep_keeps_the_count_it_was_made_with(no_flag, monkeypatch):
+    monkeypatch.setattr(host_devices, "physical_cores", lambda: 8)
+    assert host_devices.choose("auto", n_runs=24, saved=1) == 1  # its checkpoints hold its padding runs
+    assert host_devices.choose(4, n_runs=24, saved=1) == 4
+
+
+def test_apply_after_jax_started_keeps_the_count_or_refuses_a_different_one():
+    import jax
+
+    have = len(jax.devices("cpu"))  # starts the backend if no test did
+    assert host_devices.apply(have + 1, "auto") == have
+    assert host_devices.apply(have, have) == have
+    with pytest.raises(ConfigError, match=rf"host_devices={have + 1} cannot be applied"):
+        host_devices.apply(have + 1, have + 1)
+
+
+@pytest.mark.parametrize("value", [0, -1, "two", 1.5])
+def test_bad_host_devices_is_refused_with_the_allowed_values(value):
+    with pytest.raises(ConfigError, match=r"host_devices=.*(integer|auto)"):
+        SweepConfig(host_devices=value)
