@@ -252,6 +252,13 @@ def vae_loss(cfg: LearnerConfig, vae_params, frames, key):
     kl_tolerance * latent nats per image; the default 0 is the paper's plain KL).
     Returns (loss, (recon, kl)) with recon and kl on the same scale (agents summed).
     """
+    loss, (recon, kl, _) = vae_loss_and_posterior(cfg, vae_params, frames, key)
+    return loss, (recon, kl)
+
+
+def vae_loss_and_posterior(cfg: LearnerConfig, vae_params, frames, key):
+    """`vae_loss`, with the posterior its encoder computed on the way: (loss, (recon, kl,
+    (mu, logvar))), mu and logvar [B, n_agents, latent]."""
     b, n = frames.shape[:2]
     flat = frames.reshape((b * n,) + frames.shape[2:])
     recon_img, mu, logvar = make_nets(cfg).vae.apply({"params": vae_params}, flat, key)
@@ -261,7 +268,32 @@ def vae_loss(cfg: LearnerConfig, vae_params, frames, key):
     kl_term = jnp.maximum(kl, cfg.kl_tolerance * cfg.latent)
     per_image = recon + cfg.beta * kl_term
     loss = jnp.sum(per_image) / b
-    return loss, (jnp.sum(recon) / b, jnp.sum(kl) / b)
+    posterior = (mu.reshape(b, n, cfg.latent), logvar.reshape(b, n, cfg.latent))
+    return loss, (jnp.sum(recon) / b, jnp.sum(kl) / b, posterior)
+
+
+def reencoded_latents(cfg: LearnerConfig, vae_params, frames, t_pick, posterior_pick, key):
+    """The current encoder's latents (`latent`) of a replay sample's frames uint8
+    [B, T+1, n_agents, H, W, 3] -> [B, T+1, n_agents, latent], drawing the noise as `latent`
+    does with `key` (one normal draw of the whole [B, T+1, n_agents, latent]).
+
+    The frame at step t_pick[b] of each sequence was just encoded by the VAE's own update with
+    the same parameters (`posterior_pick`: (mu, logvar) [B, n_agents, latent]); only the T other
+    frames of each sequence go through the encoder here, one batch of B x T x n_agents images."""
+    b, tp1 = frames.shape[:2]
+    t = jnp.arange(tp1 - 1)[None, :]
+    others = t + (t >= t_pick[:, None])  # [B, T]: every step but t_pick, in order
+    rows = jnp.arange(b)[:, None]
+    mu_o, logvar_o = encode(cfg, vae_params, frames[rows, others])  # [B, T, n_agents, latent]
+    # back to time order: step s is t_pick's posterior or `others`' entry s - (s > t_pick)
+    s = jnp.arange(tp1)[None, :]
+    src = s - (s > t_pick[:, None])
+    picked = (s == t_pick[:, None])[..., None, None]
+    mu = jnp.where(picked, posterior_pick[0][:, None], mu_o[rows, jnp.minimum(src, tp1 - 2)])
+    if cfg.z != "sample":
+        return mu
+    logvar = jnp.where(picked, posterior_pick[1][:, None], logvar_o[rows, jnp.minimum(src, tp1 - 2)])
+    return sample_latent(key, mu, logvar)
 
 
 def self_model_loss(cfg: LearnerConfig, self_params, z, h, actions, target):
@@ -301,8 +333,8 @@ def learner_update(cfg: LearnerConfig, state: LearnerState, batch: Batch, key):
     - MDN-RNN: truncated BPTT over the seq_len transitions of each sequence, starting
       from the LSTM carry stored in replay at the sequence start; inputs are the stored
       latents (cfg.latents == "stored") or the frames re-encoded by the current VAE
-      ("reencode": `latent` of every frame; with cfg.z == "sample" a posterior sample whose
-      noise is drawn with `jax.random.split(key, 3)[2]`).
+      ("reencode": `latent` of every frame, see `reencoded_latents`; with cfg.z == "sample" a
+      posterior sample whose noise is drawn with `jax.random.split(key, 3)[2]`).
     - Self-models: targets = curiosity of the sampled transitions under the current
       MDN-RNN (stop-gradient), inputs (z_t^i, h_t), trained on the actions actually taken.
     Returns (new state, metrics dict: scalars, and `self_loss_agents` [n_agents]).
@@ -317,13 +349,14 @@ def learner_update(cfg: LearnerConfig, state: LearnerState, batch: Batch, key):
     # --- VAE -----------------------------------------------------------------------------
     t_pick = jax.random.randint(k_frame, (b,), 0, tp1)
     frames = batch.frames[jnp.arange(b), t_pick]  # [B, n_agents, H, W, 3]
-    (vae_l, (recon, kl)), g_vae = jax.value_and_grad(
-        lambda p: vae_loss(cfg, p, frames, k_vae), has_aux=True
+    (vae_l, (recon, kl, posterior)), g_vae = jax.value_and_grad(
+        lambda p: vae_loss_and_posterior(cfg, p, frames, k_vae), has_aux=True
     )(state.vae)
 
     # --- MDN-RNN ---------------------------------------------------------------------------
     if cfg.latents == "reencode":
-        z = jax.lax.stop_gradient(latent(cfg, state.vae, batch.frames, k_z))
+        posterior = jax.lax.stop_gradient(posterior)
+        z = jax.lax.stop_gradient(reencoded_latents(cfg, state.vae, batch.frames, t_pick, posterior, k_z))
     else:
         z = batch.latents
     carry0 = jax.tree.map(lambda x: x[:, 0], batch.carry)

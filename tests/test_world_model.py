@@ -333,6 +333,29 @@ def test_reencode_mode_trains_the_mdn_on_fresh_encodings(z_mode):
         assert abs(float(m["nll"]) - float(nll_of(st.rnn, mu))) > 1e-3
 
 
+@pytest.mark.parametrize("z_mode", ["sample", "mean"])
+def test_reencoding_reuses_the_vae_updates_posterior_of_its_frame(z_mode):
+    """`reencoded_latents` encodes only the frames the VAE's update did not (all but t_pick of
+    each sequence) and takes t_pick's posterior from the update: the result is `latent` of
+    every frame, noise included, in time order, wherever t_pick falls (first, middle, last)."""
+    cfg = dataclasses.replace(SMALL, z=z_mode)
+    st = wm.init_learner(cfg, jax.random.PRNGKey(0))
+    b = _batch(cfg, 3)
+    frames = np.asarray(b.frames)
+    t_pick = np.resize([0, cfg.seq_len // 2, cfg.seq_len], cfg.batch)
+    posterior = wm.encode(cfg, st.vae, frames[np.arange(cfg.batch), t_pick])
+    key = jax.random.PRNGKey(7)
+    reencoded = jax.jit(lambda *a: wm.reencoded_latents(cfg, *a))
+    got = np.asarray(reencoded(st.vae, frames, t_pick, posterior, key))
+    want = wm.latent(cfg, st.vae, frames, key)
+    np.testing.assert_allclose(got, np.asarray(want), rtol=1e-5, atol=1e-6)
+    # and the picked frames' values really come from `posterior` (same program: bitwise elsewhere)
+    moved = np.asarray(reencoded(st.vae, frames, t_pick, (posterior[0] + 100.0, posterior[1]), key))
+    for i, t in enumerate(t_pick):
+        np.testing.assert_allclose(moved[i, t] - got[i, t], 100.0, rtol=1e-5)
+        assert np.array_equal(np.delete(moved[i], t, axis=0), np.delete(got[i], t, axis=0))
+
+
 def test_curiosity_scale_sets_the_self_models_targets(update):
     """The self-models learn to predict curiosity, so their targets follow `curiosity`: the
     same update with curiosity=sum has targets (the recorded mean curiosity) `latent` times
