@@ -78,7 +78,8 @@ def init_params(module: nn.Module, key, *args, method=None):
 # ----------------------------------------------------------------------------------------
 
 
-def _conv2x2_forward(x, w):
+def _conv2x2_conv(x, w):
+    """conv2x2's forward as an XLA convolution: the form for one kernel."""
     if jax.default_backend() == "cpu":
         # XLA CPU hands a convolution to YNNPACK unless its output is larger than its
         # input in some spatial dimension (xla/backends/cpu/ynn_support.cc); YNNPACK's
@@ -90,9 +91,72 @@ def _conv2x2_forward(x, w):
     return lax.conv_general_dilated(x, w, (1, 1), "VALID", dimension_numbers=_DN)
 
 
+def _conv2x2_dx_conv(dy, w):
+    """conv2x2's input gradient as an XLA convolution: the "full" convolution of dy with
+    the flipped, transposed kernel (a plain conv). dy [B,H-1,W-1,O] -> [B,H,W,C]."""
+    wt = jnp.flip(w, (0, 1)).swapaxes(2, 3)
+    return lax.conv_general_dilated(dy, wt, (1, 1), ((1, 1), (1, 1)), dimension_numbers=_DN)
+
+
+_TAPS = ((0, 0), (0, 1), (1, 0), (1, 1))  # kernel taps (row, col), in w.reshape(4C, O)'s order
+
+
+def _conv2x2_matmul(x, w):
+    """conv2x2's forward as one matmul: the four taps' shifted views side by side along
+    channels (im2col, [B,H-1,W-1,4C]) times the kernel as a [4C, O] matrix."""
+    h, ww = x.shape[1] - 1, x.shape[2] - 1
+    cols = jnp.concatenate([x[:, i : i + h, j : j + ww] for i, j in _TAPS], axis=-1)
+    return jnp.einsum("bhwk,ko->bhwo", cols, w.reshape(-1, w.shape[-1]))
+
+
+def _conv2x2_dx_matmul(dy, w):
+    """conv2x2's input gradient as one matmul: dy times the [4C, O] kernel transposed gives
+    each tap's contribution ([B,H-1,W-1,4C]), which is added back at the tap's offset."""
+    c = w.shape[2]
+    dcols = jnp.einsum("bhwo,ko->bhwk", dy, w.reshape(-1, w.shape[-1]))
+    dx = None
+    for t, (i, j) in enumerate(_TAPS):
+        part = jnp.pad(dcols[..., t * c : (t + 1) * c], ((0, 0), (i, 1 - i), (j, 1 - j), (0, 0)))
+        dx = part if dx is None else dx + part
+    return dx
+
+
+def _by_kernel(conv_form, matmul_form):
+    """f(a, w) computed by `conv_form`, except under vmap with a batched kernel w.
+
+    vmap's rule for a convolution whose kernel is batched (each run of a vmapped sweep has
+    its own weights) is a grouped convolution (feature_group_count = batch), which GPUs
+    run slowly. A batched kernel takes `matmul_form` instead, whose
+    matmul vmap turns into a batched dot_general. With one kernel for the whole batch the
+    batch axis folds into the images' batch and the convolution stays a convolution. The
+    matmul form is not used without vmap: on a CPU its forward ran ~1.5x slower than
+    Eigen's convolution for the encoder (README.md, "On a GPU")."""
+
+    @jax.custom_batching.custom_vmap
+    def f(a, w):
+        return conv_form(a, w)
+
+    @f.def_vmap
+    def rule(axis_size, in_batched, a, w):
+        a_batched, w_batched = in_batched
+        if w_batched:
+            return jax.vmap(matmul_form, in_axes=(0 if a_batched else None, 0))(a, w), True
+        out = f(a.reshape((-1,) + a.shape[2:]), w)  # f again: an outer vmap may batch w
+        return out.reshape((axis_size, -1) + out.shape[1:]), True
+
+    return f
+
+
+_conv2x2_forward = _by_kernel(_conv2x2_conv, _conv2x2_matmul)
+_conv2x2_dx = _by_kernel(_conv2x2_dx_conv, _conv2x2_dx_matmul)
+
+
 @jax.custom_vjp
 def conv2x2(x, w):
-    """VALID 2x2 stride-1 convolution, NHWC: x [B,H,W,C], w [2,2,C,O] -> [B,H-1,W-1,O]."""
+    """VALID 2x2 stride-1 convolution, NHWC: x [B,H,W,C], w [2,2,C,O] -> [B,H-1,W-1,O].
+
+    Under vmap with a batched w (per-run weights) the forward and the input gradient are
+    matmuls, not grouped convolutions (`_by_kernel`); the kernel gradient is matmuls always."""
     return _conv2x2_forward(x, w)
 
 
@@ -102,18 +166,12 @@ def _conv2x2_fwd(x, w):
 
 def _conv2x2_bwd(res, dy):
     x, w = res
-    # d/dx: "full" convolution of dy with the flipped, transposed kernel (a plain conv).
-    wt = jnp.flip(w, (0, 1)).swapaxes(2, 3)
-    dx = lax.conv_general_dilated(dy, wt, (1, 1), ((1, 1), (1, 1)), dimension_numbers=_DN)
+    dx = _conv2x2_dx(dy, w)
     # d/dw: one matmul per kernel tap, contracting over batch and pixels.
     oh, ow, cin, cout = dy.shape[1], dy.shape[2], x.shape[-1], dy.shape[-1]
     d2 = dy.reshape(-1, cout)
     dw = jnp.stack(
-        [
-            jnp.einsum("nc,no->co", x[:, i : i + oh, j : j + ow].reshape(-1, cin), d2)
-            for i in range(2)
-            for j in range(2)
-        ]
+        [jnp.einsum("nc,no->co", x[:, i : i + oh, j : j + ow].reshape(-1, cin), d2) for i, j in _TAPS]
     ).reshape(w.shape)
     return dx, dw
 

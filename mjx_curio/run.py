@@ -13,9 +13,9 @@ axis is traversed is `RunConfig.runs_loop`:
 - "map": one run after another inside the compiled program (an in-place `fori_loop` over the
   runs axis). Every run then executes exactly the program of a run alone, so a run's results are
   bit-identical alone and inside any sweep on one device. It is also the faster
-  choice on a CPU: vmapping convolutions whose kernels differ per run turns them into grouped
-  convolutions, which XLA CPU runs slower (measured: 149 ms against 108 ms per learner update,
-  `python -m mjx_curio.bench what=sweep`).
+  choice on a CPU: there each run's convolutions are XLA convolutions, while under vmap their
+  per-run kernels make them batched matmuls (nets.conv2x2), which XLA CPU runs slower for the
+  encoder (`python -m mjx_curio.bench what=sweep` compares the two loops).
 - "vmap": all runs in lockstep, batched. What an accelerator wants; results agree with a run
   alone to float rounding (about 1e-6 after one update), so trajectories can part after many
   steps where an argmax flips.

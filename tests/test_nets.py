@@ -52,6 +52,58 @@ def test_conv2x2_custom_gradient_matches_autodiff():
         np.testing.assert_allclose(a, b, rtol=1e-4, atol=1e-3)
 
 
+def test_conv2x2_matmul_forms_match_lax_references():
+    """The matmul forms conv2x2 takes under vmap with per-run kernels (`nets._by_kernel`)
+    against lax: im2col times the kernel is the VALID convolution, and the input gradient's
+    matmul is the "full" convolution with the flipped, transposed kernel."""
+    rng = np.random.default_rng(4)
+    x = rng.standard_normal((3, 9, 7, 4), np.float32)
+    w = rng.standard_normal((2, 2, 4, 8), np.float32)
+    dy = rng.standard_normal((3, 8, 6, 8), np.float32)
+    y = lax.conv_general_dilated(x, w, (1, 1), "VALID", dimension_numbers=DN)
+    np.testing.assert_allclose(jax.jit(nets._conv2x2_matmul)(x, w), y, rtol=1e-4, atol=1e-4)
+    wt = np.flip(w, (0, 1)).swapaxes(2, 3)
+    dx = lax.conv_general_dilated(dy, wt, (1, 1), ((1, 1), (1, 1)), dimension_numbers=DN)
+    np.testing.assert_allclose(jax.jit(nets._conv2x2_dx_matmul)(dy, w), dx, rtol=1e-4, atol=1e-4)
+    # and the same input gradient by NumPy: each tap's dy @ w[i, j].T added at its offset
+    want = np.zeros_like(x)
+    for i in range(2):
+        for j in range(2):
+            want[:, i : i + 8, j : j + 6] += dy @ w[i, j].T
+    np.testing.assert_allclose(dx, want, rtol=1e-4, atol=1e-4)
+
+
+@pytest.mark.parametrize("batched", ["x and w", "w", "x"])
+def test_vmapped_conv2x2_matches_per_run_lax_conv_without_grouped_convolutions(batched):
+    """conv2x2 under vmap, value and both gradients, against lax per run. A batched kernel
+    (per-run weights) computes as batched matmuls, with no convolution left in the program;
+    a shared kernel stays one convolution over the folded batch."""
+    rng = np.random.default_rng(5)
+    r = 2
+    x = rng.standard_normal((r, 3, 9, 7, 4), np.float32)
+    w = rng.standard_normal((r, 2, 2, 4, 8), np.float32)
+    dy = rng.standard_normal((r, 3, 8, 6, 8), np.float32)
+    ax = (0 if "x" in batched else None, 0 if "w" in batched else None)
+    xs, ws = (x if ax[0] == 0 else x[0]), (w if ax[1] == 0 else w[0])
+
+    def fwd_bwd(f, x, w, dy):
+        y, vjp = jax.vjp(f, x, w)
+        return (y,) + vjp(dy)
+
+    ours = jax.jit(jax.vmap(lambda x, w, dy: fwd_bwd(nets.conv2x2, x, w, dy), in_axes=ax + (0,)))
+    ref = lambda x, w: lax.conv_general_dilated(x, w, (1, 1), "VALID", dimension_numbers=DN)  # noqa: E731
+    got = ours(xs, ws, dy)
+    for k in range(r):  # run k's (y, dx, dw), with the shared input where one is unbatched
+        want = fwd_bwd(ref, x[k] if ax[0] == 0 else x[0], w[k] if ax[1] == 0 else w[0], dy[k])
+        for name, a, b in zip(("y", "dx", "dw"), got, want):
+            np.testing.assert_allclose(a[k], b, rtol=1e-4, atol=1e-3, err_msg=name)
+    hlo = ours.lower(xs, ws, dy).as_text()
+    if ax[1] == 0:
+        assert "convolution" not in hlo and "dot_general" in hlo
+    else:
+        assert "convolution" in hlo and "feature_group_count = 2" not in hlo
+
+
 def test_space_to_depth_roundtrip_and_upconv_doubles_resolution():
     x = np.random.default_rng(0).standard_normal((2, 8, 6, 3), np.float32)
     np.testing.assert_array_equal(nets.depth_to_space(nets.space_to_depth(x)), x)
