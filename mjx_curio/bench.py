@@ -1,4 +1,4 @@
-"""Throughput figures on this machine: `python -m mjx_curio.bench what=env|learner|sweep key=value ...`
+"""Throughput figures on this machine: `python -m mjx_curio.bench what=env|learner|sweep|profile key=value ...`
 
     python -m mjx_curio.bench what=env runs=24 agents=2 image=64
     python -m mjx_curio.bench what=learner
@@ -28,6 +28,13 @@ second for one multi-agent run; docs/paper_setup.md) with peak memory under 16 G
 figures are printed, and the verdict for each reading: 35 agent-steps/s, and the stricter 35
 run-steps/s (70 agent-steps/s with two agents).
 
+what=profile: one run-step of one run at the sweep's defaults split by component (physics,
+rendering, encoding, memory, self-models, replay sampling, VAE update, MDN-RNN BPTT, self-model
+update, re-encoding), each jitted alone on the real shapes: ms per call and per run-step, XLA's
+FLOPs and bytes, GFLOP/s and % of the machine's peak (a float32 matmul of `peak_n`, measured in
+the same process), next to the whole learner_update and the sweep's own run-step
+(mjx_curio/profile.py; docs/cost_model.md).
+
 Every timing is the best of `repeats` blocks after one untimed warm-up call, each block ended
 by block_until_ready. Inputs are random: speed does not depend on the values.
 """
@@ -48,12 +55,14 @@ import mujoco
 import optax
 
 from mjx_curio import arena as arena_lib
+from mjx_curio import profile as profile_lib
 from mjx_curio import world_model as wm
 from mjx_curio.cli import Key, as_choice, as_int, main_guard
 from mjx_curio.config import LATENT_MODES, ConfigError, LearnerConfig
 
 PROG = "mjx_curio.bench"
-SUMMARY = "Throughput figures: what=env (physics + rendering), learner (VAE / learner updates) or sweep (whole runs)."
+SUMMARY = ("Throughput figures: what=env (physics + rendering), learner (VAE / learner updates), sweep (whole runs) "
+           "or profile (one run-step by component).")
 
 
 def _time(fn, args, iters: int, repeats: int):
@@ -80,6 +89,7 @@ def _platform() -> dict:
         "backend": jax.default_backend(),
         "devices": jax.device_count(),
         "cpus": os.cpu_count(),
+        "cpu_model": profile_lib.cpu_model(),  # lscpu's model name
         # Other processes competing for the cores slow every figure down; this says whether
         # they were there (1-minute load average, taken at the end).
         "load_avg": round(os.getloadavg()[0], 2),
@@ -314,9 +324,14 @@ def bench_sweep(args: dict) -> dict:
     }
 
 
+def bench_profile(args: dict) -> dict:
+    """One run-step by component (mjx_curio/profile.py)."""
+    return {**profile_lib.profile(args, _time), "peak_rss_mib": _peak_rss_mib(), **_platform()}
+
+
 # ---------------------------------------------------------------------------------- main
 
-BENCHES = {"env": bench_env, "learner": bench_learner, "sweep": bench_sweep}
+BENCHES = {"env": bench_env, "learner": bench_learner, "sweep": bench_sweep, "profile": bench_profile}
 
 KEYS = [
     Key("what", "env", "what to time: " + " | ".join(BENCHES), as_choice(tuple(BENCHES))),
@@ -326,13 +341,16 @@ KEYS = [
     Key("walls", "same", "env: wall variant: " + " | ".join(arena_lib.WALLS), as_choice(arena_lib.WALLS)),
     Key("steps", 200, "env, sweep: steps per timed chunk", as_int(1)),
     Key("repeats", 3, "timed blocks; the best is reported", as_int(1)),
-    Key("iters", 5, "learner: calls per timed block", as_int(1)),
+    Key("iters", 5, "learner, profile: calls per timed block", as_int(1)),
     Key("vae_batch", 32, "learner: frames per VAE update", as_int(1)),
-    Key("batch", 16, "learner: sequences per learner update", as_int(1)),
-    Key("seq_len", 16, "learner: transitions per sequence", as_int(2)),
-    Key("latents", "stored", "learner: " + " | ".join(LATENT_MODES), as_choice(LATENT_MODES)),
-    Key("update_every", 4, "sweep: agent steps between learner updates", as_int(1)),
-    Key("buffer", 10_000, "sweep: replay capacity per run", as_int(3)),
+    Key("batch", 16, "learner, sweep, profile: sequences per learner update", as_int(1)),
+    Key("seq_len", 16, "learner, sweep, profile: transitions per sequence", as_int(2)),
+    Key("latents", "stored", "learner, sweep, profile: " + " | ".join(LATENT_MODES), as_choice(LATENT_MODES)),
+    Key("update_every", 4, "sweep, profile: agent steps between learner updates", as_int(1)),
+    Key("buffer", 10_000, "sweep, profile: replay capacity per run", as_int(3)),
+    Key("parts", tuple(name for name, _ in profile_lib.COMPONENTS), "profile: components to profile",
+        as_choice(tuple(name for name, _ in profile_lib.COMPONENTS)), many=True),
+    Key("peak_n", 2048, "profile: side of the float32 matmul that measures the achievable peak", as_int(16)),
     Key("runs_loop", "auto", "sweep: map | vmap | auto (map on CPU)", as_choice(("auto", "map", "vmap"))),
     Key("fidelity", "paper", "sweep: paper (the defaults) | legacy (the settings before the paper-faithful defaults: "
         "square camera, mean latents, summed curiosity, unit pair friction, free bits) | both, one after the other",
@@ -345,10 +363,10 @@ def _validate(args: dict) -> None:
     """Checks that need more than one key, done before any work starts."""
     if args["what"] == "env":
         arena_lib.validate(args["walls"], args["agents"], args["image"])
-    elif args["what"] == "sweep":
+    elif args["what"] in ("sweep", "profile"):
         arena_lib.validate("same", args["agents"], args["image"])
         LearnerConfig(image=args["image"], n_agents=args["agents"], batch=args["batch"], seq_len=args["seq_len"], latents=args["latents"])
-        if args["steps"] % args["update_every"]:
+        if args["what"] == "sweep" and args["steps"] % args["update_every"]:
             raise ConfigError(f"steps={args['steps']} must be a multiple of update_every={args['update_every']}")
         if args["buffer"] < args["seq_len"] + 2:
             raise ConfigError(f"buffer={args['buffer']} must be at least seq_len + 2 = {args['seq_len'] + 2}")
@@ -379,7 +397,10 @@ def main(argv=None) -> dict | None:
         print(f"error: {err}", file=sys.stderr)
         raise SystemExit(2) from None
     result = BENCHES[args["what"]](args)
-    print(summary(result))
+    if result["what"] == "profile":
+        print(profile_lib.table(result))
+    else:
+        print(summary(result))
     if result["what"] == "env" and (args["runs"], args["agents"], args["image"]) == (24, 2, 64):
         ok = result["world_steps_per_s"] >= 500 and result["compile_s"] <= 60
         print(f"target: >= 500 world-steps/s and compile <= 60 s: {'met' if ok else 'NOT met'}")

@@ -1,0 +1,439 @@
+"""Where one run-step's time goes: `python -m mjx_curio.bench what=profile` (bench.py's CLI).
+
+One run of the sweep's workload (`LearnerConfig()` and `RunConfig()` defaults unless the bench
+keys say otherwise: 2 agents, 64 x 64, batch 16, seq_len 16, an update every 4 steps) split into
+its components, each a separately jitted function on the real shapes:
+
+    acting, every step        physics (Arena.step), rendering (Arena.render, every agent's view),
+                              encoding (world_model.latent of the agents' frames), memory
+                              (rnn_step), self-models (predict_curiosity)
+    learning, every           replay sampling (replay.sample), VAE update, MDN-RNN BPTT,
+    update_every steps        self-model update (each forward + backward + Adam, the same maths
+                              as learner_update's part), re-encoding (latents=reencode only)
+    for reference             the whole learner_update, and a whole run-step: the sweep's own
+                              compiled program (program.SweepProgram) on one run, a chunk of
+                              update_every steps, divided by update_every
+
+Encoding runs 1 + 1/update_every times per run-step: once per step for the new view, and once
+more after each update (run.learn re-encodes the current view with the updated VAE).
+
+For each: compile seconds, the best of `repeats` blocks of `iters` calls after a warm-up
+(bench._time), XLA's cost analysis of the compiled program (flops, bytes accessed), ms per
+run-step (learner parts divided by update_every), GFLOP/s and % of the machine's peak. The
+peak is measured in the same process as the best of a few `peak_n`^3 float32 matmuls
+("achievable"); a theoretical figure (cores x clock x FLOP/cycle from lscpu's flags) is given
+as well, labelled as such.
+
+XLA's cost analysis counts a while loop's body ONCE, whatever its trip count (checked on this
+jax, 0.10.x). Every `lax.scan` becomes such a loop: the MDN-RNN's time loop, the sweep's step
+loop. So each program's FLOPs are XLA's count plus the matmul and convolution FLOPs of the scan
+iterations it left out, counted from the program's jaxpr (`scan_extra_flops`). A while_loop of
+unknown trip count (MJX's constraint solver) is counted once by both (`unknown_loops`): those
+FLOPs are a lower bound. Bytes accessed are XLA's alone (loop bodies once).
+
+`parts` picks components: physics and run_step compile MJX's step (a minute or more each on a
+2-core CPU); without run_step the other parts start from a freshly reset run.
+"""
+
+from __future__ import annotations
+
+import math
+import os
+import re
+import subprocess
+import time
+
+import jax
+import jax.extend.core as jcore
+import jax.numpy as jnp
+import optax
+
+from mjx_curio import world_model as wm
+
+# (name, when it runs) in table order; "act": every step, "learn": every update_every steps,
+# "ref": a whole for reference.
+COMPONENTS = (
+    ("physics", "act"),
+    ("rendering", "act"),
+    ("encoding", "act"),
+    ("memory", "act"),
+    ("self_models", "act"),
+    ("replay_sample", "learn"),
+    ("vae_update", "learn"),
+    ("mdn_rnn_bptt", "learn"),
+    ("self_model_update", "learn"),
+    ("reencode", "learn"),
+    ("learner_update", "ref"),
+    ("run_step", "ref"),
+)
+
+
+# --------------------------------------------------------------------------- FLOP counts
+
+
+def cost(compiled) -> dict:
+    """XLA's cost analysis of a compiled program: flops, bytes accessed, transcendentals. jax
+    0.10 returns a dict (older versions: a list of one dict per program)."""
+    ca = compiled.cost_analysis()
+    if isinstance(ca, (list, tuple)):
+        ca = ca[0] if ca else {}
+    ca = ca or {}
+    return {
+        "xla_flops": float(ca.get("flops", 0.0)),
+        "xla_bytes": float(ca.get("bytes accessed", 0.0)),
+        "transcendentals": float(ca.get("transcendentals", 0.0)),
+    }
+
+
+def _sub_jaxprs(value):
+    if isinstance(value, jcore.ClosedJaxpr):
+        yield value.jaxpr
+    elif isinstance(value, jcore.Jaxpr):
+        yield value
+    elif isinstance(value, (tuple, list)):
+        for v in value:
+            yield from _sub_jaxprs(v)
+
+
+def jaxpr_flops(jaxpr, expand: bool = True) -> tuple[float, bool]:
+    """(FLOPs of the matmuls (dot_general) and convolutions of a jaxpr, 2 per multiply-add, with
+    every scan body counted `length` times (once if not `expand`), the costlier branch of a cond
+    and every other sub-jaxpr (jit, custom_vjp, while bodies) once; whether it holds a
+    while_loop, whose trip count is unknown). Convolutions count every kernel tap, padding
+    included."""
+    total, unknown = 0.0, False
+    for eqn in jaxpr.eqns:
+        name = eqn.primitive.name
+        if name == "dot_general":
+            (lc, _), _ = eqn.params["dimension_numbers"]
+            k = math.prod(eqn.invars[0].aval.shape[d] for d in lc)
+            total += 2.0 * math.prod(eqn.outvars[0].aval.shape) * k
+        elif name == "conv_general_dilated":
+            rhs = eqn.invars[1].aval.shape
+            out_feature = rhs[eqn.params["dimension_numbers"].rhs_spec[0]]
+            total += 2.0 * math.prod(eqn.outvars[0].aval.shape) * math.prod(rhs) / out_feature
+        elif name == "scan":
+            f, u = jaxpr_flops(eqn.params["jaxpr"].jaxpr, expand)
+            total, unknown = total + (eqn.params["length"] if expand else 1) * f, unknown or u
+        elif name == "cond":
+            counts = [jaxpr_flops(b.jaxpr, expand) for b in eqn.params["branches"]]
+            total, unknown = total + max(f for f, _ in counts), unknown or any(u for _, u in counts)
+        else:
+            unknown = unknown or name == "while"
+            for value in eqn.params.values():
+                for sub in _sub_jaxprs(value):
+                    f, u = jaxpr_flops(sub, expand)
+                    total, unknown = total + f, unknown or u
+    return total, unknown
+
+
+def counts(compiled, jaxpr) -> dict:
+    """XLA's counts of a compiled program, and the FLOPs it missed in scan loops (XLA counts a
+    loop body once): `flops` = XLA's flops + the jaxpr's matmul/conv FLOPs with scans expanded
+    - the same counted once. `unknown_loops`: a while_loop of unknown trip count, counted once
+    by both (MJX's solver): a lower bound."""
+    c = cost(compiled)
+    expanded, unknown = jaxpr_flops(jaxpr, True)
+    once, _ = jaxpr_flops(jaxpr, False)
+    c["scan_extra_flops"] = expanded - once
+    c["unknown_loops"] = unknown
+    c["flops"] = c["xla_flops"] + c["scan_extra_flops"]
+    return c
+
+
+# --------------------------------------------------------------------------------- peak
+
+
+def _lscpu() -> dict:
+    try:
+        text = subprocess.run(["lscpu"], capture_output=True, text=True, timeout=10).stdout
+    except (OSError, subprocess.SubprocessError):
+        return {}
+    out = {}
+    for line in text.splitlines():
+        name, sep, value = line.partition(":")
+        if sep:
+            out[name.strip()] = value.strip()
+    return out
+
+
+def cpu_model() -> str:
+    return _lscpu().get("Model name", "unknown")
+
+
+def theoretical_peak() -> dict:
+    """A theoretical float32 peak from lscpu: cores x clock x FLOP/cycle, the last from the
+    vector flags assuming two FMA pipes per core (AVX-512: 2 x 16 lanes x 2; AVX2 + FMA:
+    2 x 8 x 2; AVX: 8 + 8; else SSE 4 + 4). The clock is lscpu's "CPU max MHz", or the current
+    "cpu MHz" of /proc/cpuinfo (under a hypervisor usually the base clock: no turbo). An
+    estimate: the number of FMA pipes is not in lscpu, and the sustained clock under load is
+    unknown."""
+    info = _lscpu()
+    flags = set(info.get("Flags", "").split())
+    try:
+        cores = int(info.get("Core(s) per socket", "0")) * int(info.get("Socket(s)", "1"))
+    except ValueError:
+        cores = 0
+    cores = cores or (os.cpu_count() or 1)
+    mhz, source = 0.0, ""
+    for name in ("CPU max MHz", "CPU MHz"):
+        if info.get(name):
+            mhz, source = float(info[name]), f"lscpu {name}"
+            break
+    if not mhz:
+        try:
+            with open("/proc/cpuinfo") as f:
+                m = re.search(r"^cpu MHz\s*:\s*([0-9.]+)", f.read(), re.M)
+            if m:
+                mhz, source = float(m.group(1)), "/proc/cpuinfo cpu MHz"
+        except OSError:
+            pass
+    if "avx512f" in flags:
+        per_cycle, isa = 64, "AVX-512 FMA"
+    elif "avx2" in flags and "fma" in flags:
+        per_cycle, isa = 32, "AVX2 FMA"
+    elif "avx" in flags:
+        per_cycle, isa = 16, "AVX"
+    else:
+        per_cycle, isa = 8, "SSE"
+    gflops = cores * mhz / 1e3 * per_cycle if mhz else float("nan")
+    return {
+        "theoretical_gflops": round(gflops, 1),
+        "cores": cores,
+        "ghz": round(mhz / 1e3, 3),
+        "clock_from": source or "unknown",
+        "flop_per_cycle": per_cycle,
+        "isa": isa + " (2 pipes assumed)",
+    }
+
+
+def matmul_peak(n: int, repeats: int) -> float:
+    """Achievable float32 GFLOP/s: the best of `repeats` n x n @ n x n matmuls after a warm-up."""
+    a = jax.random.normal(jax.random.key(1), (n, n), jnp.float32)
+    b = jax.random.normal(jax.random.key(2), (n, n), jnp.float32)
+    f = jax.jit(jnp.matmul).lower(a, b).compile()
+    jax.block_until_ready(f(a, b))
+    best = float("inf")
+    for _ in range(max(repeats, 3)):
+        t0 = time.perf_counter()
+        jax.block_until_ready(f(a, b))
+        best = min(best, time.perf_counter() - t0)
+    return 2.0 * n**3 / best / 1e9
+
+
+# ------------------------------------------------------------------------------ profile
+
+
+def _configs(args: dict):
+    from mjx_curio import run as run_lib
+    from mjx_curio.config import LearnerConfig
+
+    lc = LearnerConfig(image=args["image"], n_agents=args["agents"], batch=args["batch"], seq_len=args["seq_len"],
+                       latents=args["latents"])
+    rc = run_lib.RunConfig(n_agents=args["agents"], image=args["image"], buffer=args["buffer"],
+                           update_every=args["update_every"], metrics_every=args["update_every"], runs_loop="map",
+                           learner=lc)
+    return lc, rc
+
+
+def profile(args: dict, time_fn) -> dict:
+    """The per-component profile of one run-step (module docstring); `args` are bench.py's
+    keys, `parts` the components to profile (all by default). `time_fn` is bench._time."""
+    from mjx_curio import replay as replay_lib
+    from mjx_curio.plan import RunSpec
+    from mjx_curio.program import SweepProgram
+
+    iters, repeats, ue, parts = args["iters"], args["repeats"], args["update_every"], set(args["parts"])
+    lc, rc = _configs(args)
+    arena = rc.arena
+    opt = wm.optimizer(lc)
+    n, b, t1 = lc.n_agents, lc.batch, lc.seq_len + 1
+    key = jax.random.key(args["seed"])
+    ks = jax.random.split(key, 10)
+    rows: dict = {}
+
+    def measure(name, fn, fn_args, per_step):
+        if name not in parts:
+            return
+        t0, c0 = time.perf_counter(), time.process_time()
+        traced = jax.jit(fn).trace(*fn_args)
+        compiled = traced.lower().compile()
+        compile_s, compile_cpu_s = time.perf_counter() - t0, time.process_time() - c0
+        _, best = time_fn(compiled, fn_args, iters, repeats)
+        rows[name] = {"ms_per_call": best * 1e3, "calls_per_run_step": per_step, "compile_s": round(compile_s, 2),
+                      "compile_cpu_s": round(compile_cpu_s, 2), **counts(compiled, traced.jaxpr.jaxpr)}
+
+    if "run_step" in parts:
+        # The whole run-step: the sweep's own program on one run, a chunk = one update period.
+        spec = RunSpec("eps", args["seed"], 0.2, 1.5, 1.0)
+        program = SweepProgram(rc, (spec,), -1 % len(jax.devices()), ue)
+        states = jax.block_until_ready(program.init())
+        t0, c0 = time.perf_counter(), time.process_time()
+        traced = program._chunk.trace(states)  # the sweep's jitted chunk, compiled once, here
+        chunk = traced.lower().compile()
+        compile_s, compile_cpu_s = time.perf_counter() - t0, time.process_time() - c0
+        # Warm up until the replay holds a whole sequence, so the timed chunks do train (before
+        # that run.learn's lax.cond skips the update), and one chunk more. The chunk donates
+        # its input, so each call continues from the last one's output.
+        for _ in range(-(-(lc.seq_len + 2) // ue) + 1):
+            states, _ = chunk(states)
+        jax.block_until_ready(states)
+        best = float("inf")
+        for _ in range(repeats):
+            t0 = time.perf_counter()
+            for _ in range(iters):
+                states, _ = chunk(states)
+            jax.block_until_ready(states)
+            best = min(best, (time.perf_counter() - t0) / iters)
+        # one call = a chunk of ue steps, so a run-step is 1/ue of a call
+        rows["run_step"] = {"ms_per_call": best * 1e3, "calls_per_run_step": 1.0 / ue,
+                            "compile_s": round(compile_s, 2), "compile_cpu_s": round(compile_cpu_s, 2),
+                            **counts(chunk, traced.jaxpr.jaxpr)}
+        s = jax.tree.map(lambda x: x[0], states)  # the run, after a few real steps
+        env, learner, frames, z, carry, buffer = s.env, s.learner, s.frames, s.z, s.carry, s.replay
+    else:  # a fresh run's pieces (no MJX step to compile); the nets' inputs random, their speed
+        # does not depend on the values
+        env = jax.jit(arena.reset)(ks[0]) if parts & {"physics", "rendering"} else None
+        learner = wm.init_learner(lc, ks[0])
+        frames = jax.random.randint(ks[1], (n, lc.image, lc.image, 3), 0, 256).astype(jnp.uint8)
+        z = jax.random.normal(ks[1], (n, lc.latent))
+        carry = wm.initial_carry(lc)
+        buffer = replay_lib.init_for(lc, rc.buffer)
+
+    # --- acting, every step
+    actions = jax.random.randint(ks[2], (n,), 0, lc.n_actions)
+    measure("physics", arena.step, (env, actions), 1.0)
+    measure("rendering", arena.render, (env,), 1.0)
+    measure("encoding", lambda p, f, k: wm.latent(lc, p, f, k), (learner.vae, frames, ks[3]), 1.0 + 1.0 / ue)
+    measure("memory", lambda p, c, z, a: wm.rnn_step(lc, p, c, z, a), (learner.rnn, carry, z, actions), 1.0)
+    measure("self_models", lambda p, z, h: wm.predict_curiosity(lc, p, z, h), (learner.self_model, z, carry[1]), 1.0)
+
+    # --- learning, every update_every steps, on a replay sample of the real shapes
+    buffer = buffer._replace(size=jnp.asarray(buffer.capacity, jnp.int32))  # full: every start valid
+    measure("replay_sample", lambda r, k: replay_lib.sample(r, k, b, lc.seq_len), (buffer, ks[4]), 1.0 / ue)
+    shp = (b, t1, n)
+    batch = wm.Batch(
+        frames=jax.random.randint(ks[5], shp + (lc.image, lc.image, 3), 0, 256).astype(jnp.uint8),
+        latents=jax.random.normal(ks[6], shp + (lc.latent,)),
+        actions=jax.random.randint(ks[7], shp, 0, lc.n_actions),
+        carry=(jnp.zeros((b, t1, lc.rnn_hidden)),) * 2,
+    )
+
+    def adam(g, st, p):
+        u, st = opt.update(g, st, p)
+        return optax.apply_updates(p, u), st
+
+    def vae_update(p, st, frames, k):  # learner_update's VAE part: one frame per sequence and agent
+        k_frame, k_vae = jax.random.split(k)
+        f = frames[jnp.arange(b), jax.random.randint(k_frame, (b,), 0, t1)]
+        (loss, _), g = jax.value_and_grad(lambda p: wm.vae_loss(lc, p, f, k_vae), has_aux=True)(p)
+        return adam(g, st, p), loss
+
+    measure("vae_update", vae_update, (learner.vae, learner.vae_opt, batch.frames, ks[8]), 1.0 / ue)
+    measure("reencode", lambda p, f, k: jax.lax.stop_gradient(wm.latent(lc, p, f, k)),
+            (learner.vae, batch.frames, ks[9]), 1.0 / ue if lc.latents == "reencode" else 0.0)
+    carry0 = jax.tree.map(lambda x: x[:, 0], batch.carry)
+
+    def mdn_update(p, st, carry0, z, a):  # learner_update's MDN-RNN part (on the stored latents)
+        (nll, (mix, h_in)), g = jax.value_and_grad(lambda p: wm.mdn_loss(lc, p, carry0, z, a), has_aux=True)(p)
+        return adam(g, st, p), nll, mix, h_in
+
+    mdn_args = (learner.rnn, learner.rnn_opt, carry0, batch.latents, batch.actions)
+    measure("mdn_rnn_bptt", mdn_update, mdn_args, 1.0 / ue)
+
+    def self_update(p, st, z, mix, h_in, actions):  # learner_update's self-model part
+        cur = wm.curiosity(lc, z[:, 1:], mix)
+        n_tr = b * (t1 - 1)
+        (loss, _), g = jax.value_and_grad(
+            lambda p: wm.self_model_loss(lc, p, z[:, :-1].reshape(n_tr, n, lc.latent),
+                                         h_in.reshape(n_tr, lc.rnn_hidden), actions[:, :-1].reshape(n_tr, n),
+                                         cur.reshape(n_tr, n)),
+            has_aux=True)(p)
+        return jax.vmap(adam)(g, st, p), loss
+
+    if "self_model_update" in parts:
+        # its inputs: the MDN-RNN's mixtures and hidden states on this batch (stop-gradient there)
+        mix, h_in = jax.jit(lambda p, c, z, a: wm.mdn_loss(lc, p, c, z, a)[1])(
+            learner.rnn, carry0, batch.latents, batch.actions)
+        measure("self_model_update", self_update,
+                (learner.self_model, learner.self_opt, batch.latents, mix, h_in, batch.actions), 1.0 / ue)
+    measure("learner_update", lambda st, bt, k: wm.learner_update(lc, st, bt, k), (learner, batch, key), 1.0 / ue)
+
+    peak = matmul_peak(args["peak_n"], repeats)
+    theory = theoretical_peak()
+    names = [name for name, _ in COMPONENTS if name in rows]
+    summed = [name for name, when in COMPONENTS if when != "ref" and name in rows]
+    for row in rows.values():
+        row["ms_per_run_step"] = row["ms_per_call"] * row["calls_per_run_step"]
+    sum_ms = sum(rows[p]["ms_per_run_step"] for p in summed)
+    whole_ms = rows["run_step"]["ms_per_run_step"] if "run_step" in rows else None
+    for row in rows.values():
+        row["share_pct"] = 100.0 * row["ms_per_run_step"] / (whole_ms or sum_ms or 1.0)
+        row["gflops_per_s"] = row["flops"] / (row["ms_per_call"] * 1e6)
+        row["pct_of_peak"] = 100.0 * row["gflops_per_s"] / peak
+        row["flops_per_run_step"] = row["flops"] * row["calls_per_run_step"]
+        row["bytes_per_run_step"] = row["xla_bytes"] * row["calls_per_run_step"]
+    return {
+        "what": "profile",
+        "agents": n,
+        "image": lc.image,
+        "batch": b,
+        "seq_len": lc.seq_len,
+        "update_every": ue,
+        "buffer": rc.buffer,
+        "latents": lc.latents,
+        "z": lc.z,
+        "curiosity": lc.curiosity,
+        "iters": iters,
+        "repeats": repeats,
+        "cpu_model": cpu_model(),
+        "peak_matmul_n": args["peak_n"],
+        "peak_matmul_gflops": round(peak, 1),
+        **theory,
+        "run_step_ms": None if whole_ms is None else round(whole_ms, 3),
+        "sum_of_parts_ms": round(sum_ms, 3),
+        "components": {name: {k: (round(v, 6) if isinstance(v, float) else v) for k, v in rows[name].items()}
+                       for name in names},
+    }
+
+
+def table(result: dict) -> str:
+    """The profile as a readable table, then what its columns mean and the peak."""
+    head = (f"{'component':<23}{'ms/call':>9}{'calls/step':>11}{'ms/step':>9}{'share%':>8}{'GFLOP/call':>12}"
+            f"{'MB/call':>9}{'GFLOP/s':>9}{'%peak':>7}")
+    rule = "-" * len(head)
+    lines = [head, rule]
+    comps = result["components"]
+
+    def line(name, row):
+        mark = "~" if row["unknown_loops"] else ("*" if row["scan_extra_flops"] > 0 else " ")
+        lines.append(f"{name:<23}{row['ms_per_call']:>9.3f}{row['calls_per_run_step']:>11.3g}"
+                     f"{row['ms_per_run_step']:>9.3f}{row['share_pct']:>8.1f}{row['flops'] / 1e9:>11.4f}{mark}"
+                     f"{row['xla_bytes'] / 1e6:>9.2f}{row['gflops_per_s']:>9.2f}{row['pct_of_peak']:>7.1f}")
+
+    for name, when in COMPONENTS:
+        if when != "ref" and name in comps:
+            line(name, comps[name])
+    lines.append(rule)
+    whole = result["run_step_ms"]
+    share = f"{100 * result['sum_of_parts_ms'] / whole:>8.1f}" if whole else ""
+    lines.append(f"{'sum of the parts':<23}{'':>9}{'':>11}{result['sum_of_parts_ms']:>9.3f}{share}")
+    for name, label in (("learner_update", "learner_update (whole)"), ("run_step", "run-step (whole)")):
+        if name in comps:
+            line(label, comps[name])
+    lines += [
+        "",
+        "calls/step: calls per run-step (a run-step: every agent acts once). Learner parts run once every"
+        " update_every steps; encoding runs every step and once more after each update (run.learn re-encodes the"
+        " current view); reencode counts only with latents=reencode. run-step (whole): one call is a chunk of"
+        " update_every steps of the sweep's own program.",
+        "share%: of the whole run-step (of the sum of the parts when run_step is not profiled).",
+        "GFLOP/call: XLA's cost analysis, plus the matmul/conv FLOPs of the scan iterations it leaves out (it"
+        " counts a loop body once): * = corrected so; ~ = also holds a while_loop of unknown trip count (MJX's"
+        " solver), counted once: a lower bound. MB/call: XLA's bytes accessed (loop bodies once).",
+        f"%peak: of {result['peak_matmul_gflops']} GFLOP/s achievable ({result['peak_matmul_n']}^3 float32 matmul,"
+        f" best of {max(result['repeats'], 3)}, measured now). Theoretical {result['theoretical_gflops']} GFLOP/s ="
+        f" {result['cores']} cores x {result['ghz']} GHz ({result['clock_from']}) x {result['flop_per_cycle']}"
+        f" FLOP/cycle ({result['isa']}): an estimate. CPU: {result['cpu_model']}.",
+    ]
+    return "\n".join(lines)
