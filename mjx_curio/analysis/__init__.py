@@ -34,7 +34,7 @@ and the numbers behind them (`moving_average`, `mean_ci`, `cumulative_interactio
 tests check. Loading needs only NumPy (and orbax for checkpoints); plotting needs matplotlib.
 
 The package, by job; each module imports only those above it (sweeps none; stats and recon
-sweeps; tables sweeps and stats; figures sweeps, stats and recon):
+sweeps; tables sweeps and stats; claims sweeps, stats and tables; figures sweeps, stats and recon):
 
     sweeps    loading: `load`, `find_sweeps`, `load_sweeps`, `pick_single_multi`; `Sweep`, `Run`,
               `Group`, `SweepError`; the configs a sweep ran with (`learner_config`, `run_config`,
@@ -46,6 +46,9 @@ sweeps; tables sweeps and stats; figures sweeps, stats and recon):
     recon     reconstructions: `reconstructions` (a run's VAE restored from its checkpoints,
               JAX) and the `Reconstructions` it returns
     tables    the headline table: `headline_table` and its `Table` (Markdown, CSV)
+    claims    the paper's claims tested across seeds: `claims_table` (one row per claim: statistic,
+              95% CI or p-value, verdict), a `claim_*` function per claim, `assign_presets`, and the
+              NumPy tests they use (`welch_t`, `one_way_anova`, `t_pvalue`, `f_pvalue`, `betainc`)
     figures   every `plot_*` function, the colours and labels they share, and saving
               (`figures_dir`, `save_figure`, `save_text`, `empty_axes`, `slug`)
 
@@ -55,6 +58,40 @@ as before.
 
 from __future__ import annotations
 
+from mjx_curio.analysis.claims import (
+    CLAIMS,
+    ClaimResult,
+    VERDICTS,
+    action_shares,
+    agent_curiosity_coupling,
+    assign_presets,
+    balanced_rotation_share,
+    betainc,
+    claim_agents_move_together,
+    claim_boltzmann_trembles,
+    claim_contact_ranking,
+    claim_curiosity_dip_and_rise,
+    claim_observational_curiosity,
+    claim_prefers_moving_objects,
+    claim_results,
+    claim_self_model_predicts,
+    claim_stop_least,
+    claim_temperatures_alike,
+    claim_two_agents_higher,
+    claims_table,
+    curiosity_fall_rise,
+    f_pvalue,
+    fisher_z,
+    late_curiosity,
+    moving_object_shares,
+    one_way_anova,
+    pearson_r,
+    running_action_baseline,
+    self_model_tracking,
+    t_pvalue,
+    watching_excess,
+    welch_t,
+)
 from mjx_curio.analysis.figures import (
     AGENT_COLORS,
     CURIOSITY_LABEL,
@@ -128,6 +165,14 @@ __all__ = [
     "Reconstructions", "reconstructions",
     # tables
     "Table", "headline_table",
+    # claims
+    "CLAIMS", "ClaimResult", "VERDICTS", "action_shares", "agent_curiosity_coupling", "assign_presets",
+    "balanced_rotation_share", "betainc", "claim_agents_move_together", "claim_boltzmann_trembles",
+    "claim_contact_ranking", "claim_curiosity_dip_and_rise", "claim_observational_curiosity",
+    "claim_prefers_moving_objects", "claim_self_model_predicts", "claim_stop_least", "claim_temperatures_alike",
+    "claim_two_agents_higher", "claim_results", "claims_table", "curiosity_fall_rise", "f_pvalue", "fisher_z",
+    "late_curiosity", "moving_object_shares", "one_way_anova", "pearson_r", "running_action_baseline",
+    "self_model_tracking", "t_pvalue", "watching_excess", "welch_t",
     # figures
     "AGENT_COLORS", "CURIOSITY_LABEL", "FIGURES_DIRNAME", "POLICY_COLORS", "STEPS_LABEL", "TARGET_COLORS",
     "empty_axes", "figures_dir", "plot_action_histogram", "plot_cumulative_interactions", "plot_curiosity",

@@ -1,0 +1,916 @@
+"""Claims: the paper's findings (sections 4 and 5) tested on the preset sweeps, as one table.
+
+    from mjx_curio import analysis as an
+    table = an.claims_table("runs/paper")      # or a list of Sweeps, or {preset name: Sweep}
+    print(table.to_markdown())
+
+The paper shows one run per experiment; the presets (presets.toml) run several seeds of each, so
+each claim here becomes a statistic across seeds: a mean with its 95% confidence interval
+(`stats.mean_ci`, Student t across runs) or a named test with its p-value. Every claim has its own
+function below (`claim_*`), whose docstring says exactly what is measured and how the verdict is
+decided; `claims_table` runs them all.
+
+Verdicts, and the rules every claim shares:
+  holds            the statistic shows the paper's effect at the 5% level in the paper's direction
+                   (the 95% CI excludes the null on the paper's side, or p < 0.05 with the sign the
+                   paper reports; a claim of *no* difference holds when p >= 0.05).
+  does not hold    the sweeps are at the scale the claim needs, and the statistic does not show
+                   the effect (no significant effect, or a significant one the other way; the
+                   reason follows the colon). Not significant is not the same as refuted: with
+                   8 seeds a small effect can go undetected.
+  not testable ... a preset sweep the claim needs is not loaded ("not testable: ..."), the metrics
+                   cannot show it, or the sweeps are smaller than the claim needs: "not testable at
+                   this scale (needs ...)", naming the run length and seeds that would test it.
+                   The statistic is still computed where the data allow, for inspection.
+
+Scale: every comparison needs at least `MIN_SEEDS` runs in each compared group (a 95% t interval
+over 2 runs spans +-12.7 sd, which decides nothing), and each claim names the run length its
+phenomenon needs, from where the paper sees it (e.g. the curiosity minimum between 10,000 and
+30,000 steps).
+
+Sweeps are matched to presets (`assign_presets`) by the `preset` their manifest records, else by
+their directory or dict name, else by their settings (agents, walls, policies, temperatures), so a
+sweep run by hand with a preset's settings stands in for it.
+
+Tests with p-values use only NumPy and the standard library: Student t and F tails come from the
+regularised incomplete beta function (`betainc`, a continued fraction), checked against closed
+forms in the tests. Imports `sweeps`, `stats` and `tables`.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+import pathlib
+import warnings
+from typing import Callable, Mapping, Sequence
+
+import numpy as np
+
+from mjx_curio.analysis.stats import agent_contacts, mean_ci, moving_average, object_contacts, per_agent_vae_loss
+from mjx_curio.analysis.sweeps import Group, Sweep, load_sweeps
+from mjx_curio.analysis.tables import Table
+
+ALPHA = 0.05
+MIN_SEEDS = 3
+SMOOTH = 50  # windows of the paper's moving average (50 points of 20 steps)
+
+# What each preset is, as the settings a sweep must have to stand in for it (presets.toml).
+PRESET_SETTINGS = {
+    "single_agent": dict(agents=1, walls="same", policies=("eps", "boltzmann", "ucb")),
+    "single_agent_walls_different": dict(agents=1, walls="different", policies=("eps",)),
+    "multi_agent": dict(agents=2, walls="same", policies=("eps", "boltzmann", "ucb")),
+    "multi_agent_walls_different": dict(agents=2, walls="different", policies=("eps", "boltzmann", "ucb")),
+    "boltzmann_temperatures": dict(agents=2, walls="same", policies=("boltzmann",), temperatures=2),
+}
+# The paper's setting of each policy, used where a sweep holds several (the sweep's defaults).
+PAPER_SETTING = {"eps": 0.2, "boltzmann": 1.5, "ucb": 1.0}
+
+
+# ------------------------------------------------------------------------------------ statistics
+
+
+def betainc(a: float, b: float, x: float) -> float:
+    """Regularised incomplete beta function I_x(a, b), by its continued fraction (modified Lentz;
+    the symmetry I_x(a, b) = 1 - I_{1-x}(b, a) keeps the fraction where it converges fast)."""
+    if not (a > 0 and b > 0) or not np.isfinite(x):
+        return math.nan
+    if x <= 0:
+        return 0.0
+    if x >= 1:
+        return 1.0
+    log_front = math.lgamma(a + b) - math.lgamma(a) - math.lgamma(b) + a * math.log(x) + b * math.log1p(-x)
+    if x > (a + 1) / (a + b + 2):
+        return 1.0 - betainc(b, a, 1.0 - x)
+    tiny, eps = 1e-300, 1e-15
+    c, d = 1.0, 1.0 - (a + b) * x / (a + 1)
+    d = 1.0 / (d if abs(d) > tiny else tiny)
+    h = d
+    for m in range(1, 10_000):
+        for num in (m * (b - m) * x / ((a + 2 * m - 1) * (a + 2 * m)),
+                    -(a + m) * (a + b + m) * x / ((a + 2 * m) * (a + 2 * m + 1))):
+            d = 1.0 + num * d
+            d = 1.0 / (d if abs(d) > tiny else tiny)
+            c = 1.0 + num / c
+            c = c if abs(c) > tiny else tiny
+            h *= c * d
+        if abs(c * d - 1.0) < eps:
+            break
+    return math.exp(log_front) * h / a
+
+
+def t_pvalue(t: float, df: float) -> float:
+    """Two-sided p-value of Student's t with `df` (real) degrees of freedom: P(|T| >= |t|)."""
+    if not (np.isfinite(t) and np.isfinite(df) and df > 0):
+        return math.nan
+    return betainc(df / 2.0, 0.5, df / (df + t * t))
+
+
+def f_pvalue(f: float, df1: float, df2: float) -> float:
+    """Upper tail of the F distribution: P(F >= f) with (df1, df2) degrees of freedom."""
+    if not (np.isfinite(f) and df1 > 0 and df2 > 0):
+        return math.nan
+    if f <= 0:
+        return 1.0
+    return betainc(df2 / 2.0, df1 / 2.0, df2 / (df2 + df1 * f))
+
+
+def welch_t(x, y) -> dict:
+    """Welch's unequal-variance t-test of mean(x) - mean(y) (NaNs dropped): {"diff", "t", "df",
+    "p" (two-sided), "nx", "ny"}; t, df and p are NaN below 2 values a side or with no spread."""
+    x, y = _finite(x), _finite(y)
+    out = {"diff": math.nan, "t": math.nan, "df": math.nan, "p": math.nan, "nx": len(x), "ny": len(y)}
+    if len(x) and len(y):
+        out["diff"] = float(x.mean() - y.mean())
+    if len(x) < 2 or len(y) < 2:
+        return out
+    vx, vy = x.var(ddof=1) / len(x), y.var(ddof=1) / len(y)
+    se2 = vx + vy
+    if se2 <= 0:
+        return out
+    t = out["diff"] / math.sqrt(se2)
+    df = se2**2 / (vx**2 / (len(x) - 1) + vy**2 / (len(y) - 1)) if vx > 0 and vy > 0 else (
+        len(x) - 1 if vx > 0 else len(y) - 1)
+    out.update(t=float(t), df=float(df), p=t_pvalue(t, df))
+    return out
+
+
+def one_way_anova(groups: Sequence) -> dict:
+    """One-way ANOVA across `groups` (each a 1-D array; NaNs dropped, groups with no value left
+    out): {"F", "df1", "df2", "p", "eta2" (between-group share of the total sum of squares), "k",
+    "n"}. NaN where fewer than 2 groups, no within-group degrees of freedom, or no spread."""
+    gs = [g for g in (_finite(g) for g in groups) if len(g)]
+    k, n = len(gs), sum(len(g) for g in gs)
+    out = {"F": math.nan, "df1": k - 1, "df2": n - k, "p": math.nan, "eta2": math.nan, "k": k, "n": n}
+    if k < 2 or n - k < 1:
+        return out
+    grand = np.concatenate(gs).mean()
+    ss_between = sum(len(g) * (g.mean() - grand) ** 2 for g in gs)
+    ss_within = sum(((g - g.mean()) ** 2).sum() for g in gs)
+    if ss_between + ss_within <= 0:
+        return out
+    out["eta2"] = float(ss_between / (ss_between + ss_within))
+    if ss_within <= 0:
+        return out
+    f = (ss_between / (k - 1)) / (ss_within / (n - k))
+    out.update(F=float(f), p=f_pvalue(f, k - 1, n - k))
+    return out
+
+
+def pearson_r(x, y) -> float:
+    """Pearson correlation over the positions where both are finite; NaN below 3 or with no spread."""
+    x, y = np.asarray(x, float), np.asarray(y, float)
+    ok = np.isfinite(x) & np.isfinite(y)
+    if ok.sum() < 3:
+        return math.nan
+    x, y = x[ok] - x[ok].mean(), y[ok] - y[ok].mean()
+    den = math.sqrt(float((x * x).sum() * (y * y).sum()))
+    return float((x * y).sum() / den) if den > 0 else math.nan
+
+
+def fisher_z(r) -> np.ndarray:
+    """arctanh(r), with |r| clipped below 1 so a perfect correlation stays finite."""
+    return np.arctanh(np.clip(np.asarray(r, float), -0.999999, 0.999999))
+
+
+# ------------------------------------------------------------------------------- sweeps to presets
+
+
+def assign_presets(sweeps) -> dict[str, Sweep]:
+    """{preset name: Sweep} from `sweeps`: a directory (as `load_sweeps` reads it), a list of
+    Sweeps, or a dict {name: Sweep}. A sweep serves a preset when, in this order: its manifest
+    records that `preset`; its name (dict key, else directory name) is the preset's; or its settings
+    fit the preset (same number of agents and walls, at least one of its policies, and for
+    `boltzmann_temperatures` at least 2 temperatures). A sweep named after or made by one preset
+    serves only that one; the first fitting sweep wins."""
+    if isinstance(sweeps, (str, pathlib.Path)):
+        sweeps = load_sweeps(sweeps)
+    named = list(sweeps.items()) if isinstance(sweeps, Mapping) else [(s.name, s) for s in sweeps]
+    out: dict[str, Sweep] = {}
+    fixed = set()
+    for name, s in named:
+        recorded = s.manifest.get("config", {}).get("preset", "none")
+        for key in (recorded, name):
+            if key in PRESET_SETTINGS:
+                out.setdefault(key, s)
+                fixed.add(id(s))
+                break
+    for preset, want in PRESET_SETTINGS.items():
+        if preset in out:
+            continue
+        for _, s in named:
+            if id(s) not in fixed and _fits(s, want):
+                out[preset] = s
+                break
+    return out
+
+
+def _fits(s: Sweep, want: dict) -> bool:
+    if s.n_agents != want["agents"] or s.manifest.get("config", {}).get("walls", "same") != want["walls"]:
+        return False
+    policies = {r.policy for r in s.runs}
+    if not policies & set(want["policies"]):
+        return False
+    return len(s.groups("boltzmann")) >= want.get("temperatures", 0)
+
+
+# ------------------------------------------------------------------------------------ the claims
+
+
+@dataclasses.dataclass
+class ClaimResult:
+    """One row of the claims table. `values`: the numbers behind `statistic` (None where the data
+    cannot give them)."""
+
+    key: str
+    claim: str
+    evidence: str
+    statistic: str
+    verdict: str
+    values: dict = dataclasses.field(default_factory=dict)
+
+
+VERDICTS = ("holds", "does not hold", "not testable")
+
+
+def claim_curiosity_dip_and_rise(presets: Mapping[str, Sweep]) -> ClaimResult:
+    """Claim 1: curiosity falls in the first few thousand steps, then rises again (figs. 8, 17, 18).
+
+    Measured per run on the curiosity (window means, averaged over the agents), as means over
+    fixed blocks of steps placed where the paper's figures put them: early = steps 0-2,000 (the
+    initial high level), trough = steps 10,000-30,000 (the paper's minima: ~5,000-15,000 in fig. 8,
+    20,000-25,000 in fig. 17, 10,000-30,000 in fig. 18), late = the last 10,000 steps.
+    fall = early - trough, rise = late - trough. Fixed blocks, not each run's own minimum: a
+    minimum picked out of noise lies below the curve's level, so `late - minimum` is positive even
+    for a flat curve. Groups: single_agent eps (fig. 8), multi_agent eps (fig. 17) and ucb (fig. 18),
+    those loaded. (Fig. 15, walls different, shows a fall and then a plateau, not a rise; left out.)
+    Verdict: holds if in every group the 95% CIs of both fall and rise lie above 0. Scale: runs of
+    >= 40,000 steps (the late block must start after the trough block), >= MIN_SEEDS seeds a group.
+    """
+    key, claim = "1", "Curiosity falls in the first few thousand steps, then rises again"
+    evidence = "figs. 8 (single agent, ε-greedy), 17 (two agents, ε-greedy), 18 (two agents, UCB); one run each"
+    sources = [("single_agent", "eps", "fig. 8"), ("multi_agent", "eps", "fig. 17"), ("multi_agent", "ucb", "fig. 18")]
+    groups = _source_groups(presets, sources)
+    if not groups:
+        return ClaimResult(key, claim, evidence, "n/a", _missing(("single_agent", "multi_agent"), presets))
+    parts, values, fails = [], {}, []
+    for label, s, g in groups:
+        d = curiosity_fall_rise(s, g)
+        fall, rise = mean_ci(d["fall"]), mean_ci(d["rise"])
+        parts.append(f"{label}: fall {_ci(fall)}, rise {_ci(rise)}")
+        values.update({f"{label} fall": _num(fall[0]), f"{label} fall low": _num(fall[1]),
+                       f"{label} rise": _num(rise[0]), f"{label} rise low": _num(rise[1])})
+        if not (fall[1] > 0 and rise[1] > 0):
+            fails.append(f"{label}: {'fall' if not fall[1] > 0 else 'rise'} CI does not lie above 0")
+    gap = _scale_gaps([(s, 40_000, {label: g.n}) for label, s, g in groups])
+    gaps = [gap] if gap else []
+    stat = ("mean over runs [95% CI] of fall = curiosity(steps 0-2k) - curiosity(10k-30k) and "
+            "rise = curiosity(last 10k steps) - curiosity(10k-30k); " + "; ".join(parts))
+    return ClaimResult(key, claim, evidence, stat, _decide(gaps, fails, "every fall and rise CI above 0"), values)
+
+
+def curiosity_fall_rise(sweep: Sweep, group: Group) -> dict:
+    """Per run of `group`: {"early", "trough", "late", "fall", "rise"} (arrays [runs]); the blocks
+    of `claim_curiosity_dip_and_rise`, NaN where a block holds no window."""
+    c = _nanmean(sweep.metrics["curiosity"][group.indices].astype(float), axis=2)  # [n, W]
+    t = sweep.steps_done
+    early = _block_mean(sweep, c, 0, 2_000)
+    trough = _block_mean(sweep, c, 10_000, 30_000)
+    late = _block_mean(sweep, c, max(t - 10_000, 30_000), t)
+    return {"early": early, "trough": trough, "late": late, "fall": early - trough, "rise": late - trough}
+
+
+def claim_contact_ranking(presets: Mapping[str, Sweep]) -> ClaimResult:
+    """Claim 2: UCB gives the most agent-object and agent-agent contacts, Boltzmann the fewest
+    agent-object contacts (figs. 21, 22, section 4.1.5).
+
+    Measured on multi_agent, per run: agent-object contact steps over the whole run (summed over
+    both agents and the four objects, `stats.object_contacts`), and steps with the agents touching
+    (`stats.agent_contacts`). One group per policy (the paper's setting where a sweep has several).
+    Five Welch t-tests across runs: objects UCB > ε-greedy, UCB > Boltzmann, Boltzmann < ε-greedy;
+    agent-agent UCB > ε-greedy, UCB > Boltzmann. Verdict: holds if all five have p < 0.05 with the
+    paper's sign (requiring every one to pass needs no multiple-test correction). Scale: runs of
+    >= 40,000 steps (fig. 21: Boltzmann's contacts stop at ~30,000, UCB has 60% of its total by
+    40,000), >= MIN_SEEDS seeds a policy.
+    """
+    key, claim = "2", "UCB gives the most agent-object and agent-agent contacts; Boltzmann the fewest object contacts"
+    evidence = "figs. 21, 22 and section 4.1.5 (two agents; one run per policy)"
+    s = presets.get("multi_agent")
+    if s is None:
+        return ClaimResult(key, claim, evidence, "n/a", _missing(("multi_agent",), presets))
+    gs = {p: _paper_group(s, p) for p in ("eps", "boltzmann", "ucb")}
+    if any(g is None for g in gs.values()):
+        lacking = [p for p, g in gs.items() if g is None]
+        return ClaimResult(key, claim, evidence, "n/a", f"not testable: {s.name} (multi_agent) has no runs of "
+                                                        f"{', '.join(lacking)}")
+    obj = object_contacts(s).sum(axis=1).astype(float)
+    agt = agent_contacts(s).sum(axis=1).astype(float)
+    tests = {  # (label, values of the higher side, values of the lower side)
+        "objects UCB > ε": (obj[gs["ucb"].indices], obj[gs["eps"].indices]),
+        "objects UCB > Boltzmann": (obj[gs["ucb"].indices], obj[gs["boltzmann"].indices]),
+        "objects ε > Boltzmann": (obj[gs["eps"].indices], obj[gs["boltzmann"].indices]),
+        "agent-agent UCB > ε": (agt[gs["ucb"].indices], agt[gs["eps"].indices]),
+        "agent-agent UCB > Boltzmann": (agt[gs["ucb"].indices], agt[gs["boltzmann"].indices]),
+    }
+    values, parts = {}, []
+    for what, arr in (("objects", obj), ("agent-agent", agt)):
+        cells = []
+        for p, g in gs.items():
+            m = mean_ci(arr[g.indices])
+            values[f"{what} {p}"] = _num(m[0])
+            cells.append(f"{_short(p)} {_ci(m, 0)}")
+        parts.append(f"{what} contact steps per run: " + ", ".join(cells))
+    fails, tparts = [], []
+    for label, (hi, lo) in tests.items():
+        w = welch_t(hi, lo)
+        values[f"{label} t"], values[f"{label} p"] = _num(w["t"]), _num(w["p"])
+        tparts.append(f"{label}: t={_f(w['t'])}, p={_p(w['p'])}")
+        if not (w["p"] < ALPHA and w["diff"] > 0):
+            fails.append(label)
+    gap = _scale_gap(s, 40_000, {g.label: g.n for g in gs.values()})
+    stat = f"{s.name}: " + "; ".join(parts) + ". Welch t: " + "; ".join(tparts)
+    return ClaimResult(key, claim, evidence, stat,
+                       _decide([gap] if gap else [], [f"not significant: {', '.join(fails)}"] if fails else [],
+                               "all five Welch tests p < 0.05 in the paper's direction"), values)
+
+
+def claim_two_agents_higher(presets: Mapping[str, Sweep]) -> ClaimResult:
+    """Claim 3: two agents have higher curiosity and a higher VAE loss than one (figs. 23, 24).
+
+    Measured on the UCB runs (the paper's choice) of single_agent and multi_agent, per run, as
+    means over the second half of the run (after the initial fall): curiosity (averaged over the
+    agents) and the VAE loss per image (`stats.per_agent_vae_loss`: the two-agent loss of eq. 5
+    sums both views, so it is halved; the summed loss is ~2x a single agent's by construction).
+    Welch t multi - single for each. Verdict: holds if both differences are positive with p < 0.05.
+    Scale: runs of >= 10,000 steps (the second half then starts after the fall, ~5,000 steps in
+    fig. 8), >= MIN_SEEDS seeds a side; the two sweeps must have the same image size.
+    """
+    key, claim = "3", "Two agents have higher curiosity and a higher VAE loss than one"
+    evidence = "figs. 23, 24, section 4.2 (UCB; one single-agent and one two-agent run)"
+    single, multi = presets.get("single_agent"), presets.get("multi_agent")
+    if single is None or multi is None:
+        return ClaimResult(key, claim, evidence, "n/a", _missing(("single_agent", "multi_agent"), presets))
+    gs, gm = _paper_group(single, "ucb"), _paper_group(multi, "ucb")
+    if gs is None or gm is None:
+        return ClaimResult(key, claim, evidence, "n/a", "not testable: " + " and ".join(
+            f"{s.name} has no UCB runs" for s, g in ((single, gs), (multi, gm)) if g is None))
+    cur = {w: _late_half(s, _nanmean(s.metrics["curiosity"][g.indices].astype(float), axis=2))
+           for w, s, g in (("single", single, gs), ("multi", multi, gm))}
+    vae = {w: _late_half(s, per_agent_vae_loss(s)[g.indices].astype(float))
+           for w, s, g in (("single", single, gs), ("multi", multi, gm))}
+    values, parts, fails = {}, [], []
+    for what, d in (("curiosity", cur), ("VAE loss per image", vae)):
+        ms, mm = mean_ci(d["single"]), mean_ci(d["multi"])
+        w = welch_t(d["multi"], d["single"])
+        values.update({f"{what} single": _num(ms[0]), f"{what} multi": _num(mm[0]), f"{what} t": _num(w["t"]),
+                       f"{what} p": _num(w["p"])})
+        parts.append(f"{what}: one agent {_ci(ms)}, two agents {_ci(mm)}, Welch t={_f(w['t'])}, p={_p(w['p'])}")
+        if not (w["p"] < ALPHA and w["diff"] > 0):
+            fails.append(f"{what} not significantly higher with two agents")
+    gap = _scale_gaps([(single, 10_000, {f"{single.name} UCB": gs.n}), (multi, 10_000, {f"{multi.name} UCB": gm.n})])
+    gaps = [gap] if gap else []
+    if single.image != multi.image:
+        return ClaimResult(key, claim, evidence, "; ".join(parts),
+                           f"not testable: {single.name} ({single.image} px) and {multi.name} ({multi.image} px) "
+                           "differ in image size", values)
+    stat = f"mean over the second half of each run, {single.name} vs {multi.name}: " + "; ".join(parts)
+    return ClaimResult(key, claim, evidence, stat, _decide(gaps, fails, "both Welch tests p < 0.05, multi > single"),
+                       values)
+
+
+def claim_agents_move_together(presets: Mapping[str, Sweep]) -> ClaimResult:
+    """Claim 4: the two agents' curiosity curves move together ("remarkably similar", 4.1.2, 5).
+
+    Measured on every run of multi_agent: the Pearson correlation of the two agents' smoothed
+    curiosity (trailing moving average of 50 windows, the curve of fig. 17), on Fisher's z scale,
+    minus a baseline: the mean z of the correlation between an agent of this run and the other
+    agent of each other run of the same group (same policy and setting, other seed), in both
+    pairings. The baseline has the same learning trend and the same policy but no shared events,
+    so the difference is what the shared run adds. Verdict: holds if the 95% CI of the mean
+    difference across runs lies above 0. Scale: runs of >= 10,000 steps (>= 10 stretches of 1,000
+    steps, the smoothing span), >= MIN_SEEDS runs with a baseline (2+ seeds in their group).
+    """
+    key, claim = "4", "The two agents' curiosity curves move together"
+    evidence = "section 4.1.2 (fig. 17: 'remarkably similar'), section 5; one run"
+    s = presets.get("multi_agent")
+    if s is None:
+        return ClaimResult(key, claim, evidence, "n/a", _missing(("multi_agent",), presets))
+    d = agent_curiosity_coupling(s)
+    within, cross, diff = mean_ci(d["within"]), mean_ci(d["cross"]), mean_ci(d["diff"])
+    n = int(np.isfinite(d["diff"]).sum())
+    values = {"within z": _num(within[0]), "cross-run z": _num(cross[0]), "diff": _num(diff[0]),
+              "diff low": _num(diff[1]), "diff high": _num(diff[2]), "runs": n}
+    stat = (f"{s.name}, runs: {n}: Fisher z of the agents' correlation (smoothed curiosity) within a run "
+            f"{_ci(within)} (r={_f(np.tanh(within[0]))}), agents of different runs of the same group {_ci(cross)} "
+            f"(r={_f(np.tanh(cross[0]))}); within - baseline {_ci(diff)}")
+    gap = _scale_gap(s, 10_000, {"runs with a baseline": n})
+    fails = [] if diff[1] > 0 else ["the within-run correlation is not above the cross-run baseline"]
+    return ClaimResult(key, claim, evidence, stat, _decide([gap] if gap else [], fails, "the CI above 0"), values)
+
+
+def agent_curiosity_coupling(sweep: Sweep, window: int = SMOOTH) -> dict:
+    """Per run: {"within" z of corr(agent 0, agent 1), "cross" the baseline z, "diff" within -
+    cross} (arrays [runs], NaN where a run's group has no other run); see
+    `claim_agents_move_together`."""
+    c = moving_average(sweep.metrics["curiosity"].astype(float), window, axis=1)  # [R, W, 2]
+    n = sweep.n_runs
+    within, cross = np.full(n, np.nan), np.full(n, np.nan)
+    for g in sweep.groups():
+        for i in g.indices:
+            within[i] = fisher_z(pearson_r(c[i, :, 0], c[i, :, 1]))
+            others = [j for j in g.indices if j != i]
+            if others:
+                cross[i] = np.mean([(fisher_z(pearson_r(c[i, :, 0], c[j, :, 1]))
+                                     + fisher_z(pearson_r(c[j, :, 0], c[i, :, 1]))) / 2 for j in others])
+    return {"within": within, "cross": cross, "diff": within - cross}
+
+
+MOVING_OBJECTS = ("sphere", "cylinder")
+
+
+def claim_prefers_moving_objects(presets: Mapping[str, Sweep]) -> ClaimResult:
+    """Claim 5: the agent prefers objects that move (the sphere, the toppled rolling cylinder) to
+    the static ones (pyramid, disc) (section 4.1, fig. 9).
+
+    Measured on the ε-greedy runs of single_agent (fig. 9's run), per run over the whole run: the
+    share of agent-object contact steps that are with the sphere or the cylinder (runs with fewer
+    than 20 contact steps in all are left out: no preference to measure), and, reported alongside,
+    the same share of the view (object pixels only). Null: 0.5, no preference between the pairs.
+    The pairs differ in size and starting place, so 0.5 is only a first-order null. Verdict: holds
+    if the 95% CI of the contact share lies above 0.5. Scale: runs of >= 40,000 steps (the agent
+    first interacts often with objects at ~25,000 steps in fig. 9), >= MIN_SEEDS runs with contacts.
+    """
+    key, claim = "5", "The agent prefers objects that move (sphere, toppled cylinder) to static ones"
+    evidence = "section 4.1, fig. 9 (one agent, ε-greedy; one run)"
+    s = presets.get("single_agent")
+    if s is None:
+        return ClaimResult(key, claim, evidence, "n/a", _missing(("single_agent",), presets))
+    g = _paper_group(s, "eps")
+    if g is None:
+        return ClaimResult(key, claim, evidence, "n/a", f"not testable: {s.name} has no ε-greedy runs")
+    d = moving_object_shares(s, g)
+    c, v = mean_ci(d["contact_share"]), mean_ci(d["view_share"])
+    n = int(np.isfinite(d["contact_share"]).sum())
+    values = {"contact share": _num(c[0]), "contact share low": _num(c[1]), "view share": _num(v[0]), "runs": n}
+    stat = (f"{s.name} {g.label}: share of contact steps with sphere+cylinder {_ci(c)} ({n} runs with >= 20 contact "
+            f"steps); share of object pixels in view {_ci(v)}; null 0.5")
+    gap = _scale_gap(s, 40_000, {"runs with contacts": n})
+    fails = [] if c[1] > 0.5 else ["the contact share's CI does not lie above 0.5"]
+    return ClaimResult(key, claim, evidence, stat, _decide([gap] if gap else [], fails, "the CI above 0.5"), values)
+
+
+def moving_object_shares(sweep: Sweep, group: Group, min_contacts: int = 20) -> dict:
+    """Per run of `group`: {"contact_share", "view_share"} of the sphere and cylinder among the
+    four objects, over the whole run and all agents (contact share NaN below `min_contacts`)."""
+    mov = [sweep.objects.index(o) for o in MOVING_OBJECTS]
+    k = len(sweep.objects)
+    contacts = sweep.metrics["contact_object"][group.indices].astype(float).sum(axis=(1, 2))  # [n, K]
+    total = contacts.sum(axis=1)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        contact_share = np.where(total >= min_contacts, contacts[:, mov].sum(axis=1) / total, np.nan)
+        view = _nanmean(sweep.metrics["view_fraction"][group.indices][..., :k].astype(float), axis=(1, 2))  # [n, K]
+        view_share = view[:, mov].sum(axis=1) / view.sum(axis=1)
+    return {"contact_share": contact_share, "view_share": view_share}
+
+
+def claim_stop_least(presets: Mapping[str, Sweep]) -> ClaimResult:
+    """Claim 6a: `stop` is the action chosen least (figs. 10, 12).
+
+    Measured on the ε-greedy runs (the policy of figs. 10 and 12) of single_agent,
+    single_agent_walls_different and multi_agent, those loaded, per run over the whole run and all
+    agents: the margin = (share of the least chosen other action) - (share of stop); positive when
+    stop is the least chosen. Verdict: holds if in every group the 95% CI of the margin lies above 0.
+    Scale: runs of >= 10,000 steps (the self-model must first learn that stop is dull),
+    >= MIN_SEEDS seeds a group.
+    """
+    key, claim = "6a", "'stop' is the action chosen least"
+    evidence = "figs. 10, 12, section 4.1.1 (one agent, ε-greedy; one run each)"
+    sources = [("single_agent", "eps", "fig. 10"), ("single_agent_walls_different", "eps", "fig. 12"),
+               ("multi_agent", "eps", "two agents")]
+    groups = _source_groups(presets, sources)
+    if not groups:
+        return ClaimResult(key, claim, evidence, "n/a", _missing(("single_agent", "multi_agent"), presets))
+    parts, values, fails = [], {}, []
+    for label, s, g in groups:
+        if "stop" not in s.actions:
+            return ClaimResult(key, claim, evidence, "n/a", f"not testable: {s.name} has no 'stop' action")
+        shares = action_shares(s, g)
+        stop = s.actions.index("stop")
+        margin = np.delete(shares, stop, axis=1).min(axis=1) - shares[:, stop]
+        m, st = mean_ci(margin), mean_ci(shares[:, stop])
+        values.update({f"{label} margin": _num(m[0]), f"{label} margin low": _num(m[1]),
+                       f"{label} stop share": _num(st[0])})
+        parts.append(f"{label}: stop share {_ci(st)}, margin {_ci(m)}")
+        if not m[1] > 0:
+            fails.append(f"{label}: the margin's CI does not lie above 0")
+    gap = _scale_gaps([(s, 10_000, {label: g.n}) for label, s, g in groups])
+    gaps = [gap] if gap else []
+    stat = ("margin = share of the least chosen other action - share of stop, mean over runs [95% CI]; "
+            + "; ".join(parts))
+    return ClaimResult(key, claim, evidence, stat, _decide(gaps, fails, "every margin CI above 0"), values)
+
+
+def action_shares(sweep: Sweep, group: Group) -> np.ndarray:
+    """[runs of the group, actions]: each action's share of all steps of the run (agents pooled)."""
+    counts = sweep.metrics["action_counts"][group.indices].astype(float).sum(axis=(1, 2))
+    return counts / np.maximum(counts.sum(axis=1, keepdims=True), 1)
+
+
+def claim_boltzmann_trembles(presets: Mapping[str, Sweep]) -> ClaimResult:
+    """Claim 6b: Boltzmann agents "tremble" (rapid alternating rotations; section 5), where tuned
+    ε-greedy and UCB do not.
+
+    The metrics record how often each action was taken per 20-step window, not the order, so
+    alternation itself cannot be seen. Stand-in, per run of multi_agent over the whole run and
+    both agents: the balanced-rotation share = sum over windows of 2 * min(rotate_left,
+    rotate_right) / steps, the most steps of a window that alternating left/right turns could
+    fill. Trembling needs it high; a high value does not prove trembling (the turns may come in
+    two runs of one direction each). Welch t: Boltzmann > ε-greedy and Boltzmann > UCB.
+    Verdict: if both are significant, "not testable" (consistent with trembling, which the counts
+    cannot confirm); otherwise "does not hold" (the counts rule out more alternation than the
+    other policies). Scale: runs of >= 20,000 steps, >= MIN_SEEDS seeds a policy.
+    """
+    key, claim = "6b", "Boltzmann agents 'tremble' (rapid alternating rotations)"
+    evidence = "section 5 (qualitative, from videos)"
+    s = presets.get("multi_agent")
+    if s is None:
+        return ClaimResult(key, claim, evidence, "n/a", _missing(("multi_agent",), presets))
+    gs = {p: _paper_group(s, p) for p in ("boltzmann", "eps", "ucb")}
+    if gs["boltzmann"] is None or (gs["eps"] is None and gs["ucb"] is None):
+        return ClaimResult(key, claim, evidence, "n/a", f"not testable: {s.name} lacks Boltzmann or comparison runs")
+    if not {"rotate_left", "rotate_right"} <= set(s.actions):
+        return ClaimResult(key, claim, evidence, "n/a", f"not testable: {s.name} has no rotate actions")
+    bal = balanced_rotation_share(s)
+    values, parts, fails = {}, [], []
+    for p, g in gs.items():
+        if g is not None:
+            m = mean_ci(bal[g.indices])
+            values[f"{p} balanced rotation"] = _num(m[0])
+            parts.append(f"{_short(p)} {_ci(m)}")
+    tparts = []
+    for p in ("eps", "ucb"):
+        if gs[p] is None:
+            continue
+        w = welch_t(bal[gs["boltzmann"].indices], bal[gs[p].indices])
+        values[f"Boltzmann > {p} p"] = _num(w["p"])
+        tparts.append(f"Boltzmann > {_short(p)}: t={_f(w['t'])}, p={_p(w['p'])}")
+        if not (w["p"] < ALPHA and w["diff"] > 0):
+            fails.append(f"Boltzmann not significantly above {_short(p)}")
+    stat = (f"{s.name}: balanced-rotation share 2*min(rotate_left, rotate_right)/steps per 20-step window "
+            f"(an upper bound on alternating turns; action order is not recorded): {', '.join(parts)}; "
+            + "; ".join(tparts))
+    gap = _scale_gap(s, 20_000, {g.label: g.n for g in gs.values() if g is not None})
+    if gap:
+        verdict = f"not testable at this scale (needs {gap})"
+    elif fails:
+        verdict = "does not hold: " + "; ".join(fails)
+    else:
+        verdict = ("not testable: per-step action order is not recorded; the window counts are consistent with "
+                   "trembling (Boltzmann's balanced-rotation share is significantly higher)")
+    return ClaimResult(key, claim, evidence, stat, verdict, values)
+
+
+def balanced_rotation_share(sweep: Sweep) -> np.ndarray:
+    """[runs]: sum over windows and agents of 2 * min(rotate_left, rotate_right), over the steps
+    taken (agents pooled): the share of steps alternating turns could at most account for."""
+    a = sweep.metrics["action_counts"].astype(float)  # [R, W, agents, actions]
+    rl, rr = a[..., sweep.actions.index("rotate_left")], a[..., sweep.actions.index("rotate_right")]
+    total = a.sum(axis=(1, 2, 3))
+    return 2 * np.minimum(rl, rr).sum(axis=(1, 2)) / np.maximum(total, 1)
+
+
+def claim_temperatures_alike(presets: Mapping[str, Sweep]) -> ClaimResult:
+    """Claim 7: Boltzmann temperatures 0.5-2.5 make no significant difference (fig. 19, 4.1.4).
+
+    Measured on boltzmann_temperatures, per run: the late curiosity = mean over the last quarter
+    of the run (after the initial drop, where fig. 19's curves converge), averaged over the agents.
+    One-way ANOVA across the temperature groups (F test; p from the F distribution), with eta^2.
+    Verdict: holds if p >= 0.05 (no significant difference, the paper's claim; with 8 seeds a
+    temperature, only a sizeable effect would be detected), does not hold if p < 0.05. Scale: >= 2
+    temperatures, runs of >= 40,000 steps, >= MIN_SEEDS seeds a temperature.
+    """
+    key, claim = "7", "Boltzmann temperatures 0.5-2.5 make no significant difference"
+    evidence = "fig. 19, section 4.1.4 (one run per temperature)"
+    s = presets.get("boltzmann_temperatures")
+    if s is None:
+        return ClaimResult(key, claim, evidence, "n/a", _missing(("boltzmann_temperatures",), presets))
+    gs = sorted(s.groups("boltzmann"), key=lambda g: g.value)
+    late = late_curiosity(s)
+    a = one_way_anova([late[g.indices] for g in gs])
+    cells = [f"T={g.value:g} {_ci(mean_ci(late[g.indices]))}" for g in gs]
+    values = {"F": _num(a["F"]), "p": _num(a["p"]), "eta2": _num(a["eta2"]), "df1": a["df1"], "df2": a["df2"]}
+    values.update({f"T={g.value:g}": _num(np.nanmean(late[g.indices])) for g in gs})
+    stat = (f"{s.name}: late curiosity (last quarter of the run) per temperature: {', '.join(cells)}; one-way ANOVA "
+            f"F({a['df1']}, {a['df2']})={_f(a['F'])}, p={_p(a['p'])}, eta²={_f(a['eta2'])}")
+    gaps = []
+    if len(gs) < 2:
+        gaps.append(f">= 2 temperatures; {s.name} has {len(gs)}")
+    gap = _scale_gap(s, 40_000, {g.label: g.n for g in gs})
+    if gap:
+        gaps.append(gap)
+    if gaps:
+        return ClaimResult(key, claim, evidence, stat, f"not testable at this scale (needs {'; '.join(gaps)})", values)
+    if not np.isfinite(a["p"]):
+        return ClaimResult(key, claim, evidence, stat, "not testable: the ANOVA is undefined (no spread)", values)
+    verdict = "holds" if a["p"] >= ALPHA else f"does not hold: the temperatures differ (p={_p(a['p'])})"
+    return ClaimResult(key, claim, evidence, stat, verdict, values)
+
+
+def late_curiosity(sweep: Sweep, fraction: float = 0.25) -> np.ndarray:
+    """[runs]: mean curiosity over the last `fraction` of the windows, averaged over agents."""
+    k = max(1, int(math.ceil(fraction * sweep.n_windows)))
+    return _nanmean(sweep.metrics["curiosity"][:, -k:].astype(float), axis=(1, 2))
+
+
+def claim_self_model_predicts(presets: Mapping[str, Sweep]) -> ClaimResult:
+    """Claim 8: the self-model knows what will surprise it (its role, sections 3.2, 5): its
+    predicted curiosity of the chosen action tracks the curiosity obtained, better as it trains
+    and better than a baseline that predicts each action's running mean.
+
+    The metrics hold, per 20-step window and agent, the mean predicted curiosity of the actions
+    taken (`predicted`) and the mean obtained (`curiosity`), and the action counts; not per-step
+    (prediction, outcome) pairs. Measured per run of multi_agent and agent on these window means,
+    each detrended by its own trailing moving average of 50 windows (the slow fall and rise would
+    otherwise make any two smooth curves correlate): r_self = corr(predicted, obtained) and
+    r_base = corr(baseline, obtained), where the baseline predicts a window's curiosity as its
+    action shares times each action's running mean curiosity, estimated from the previous 50
+    windows alone (ridge regression of window curiosity on action shares, shrunk towards their
+    overall mean). On Fisher's z scale, averaged over agents: rise = z(r_self, last third of the
+    windows) - z(r_self, first third); edge = z(r_self, last third) - z(r_base, last third).
+    Verdict: holds if the 95% CIs across runs of both lie above 0. Scale: runs of >= 20,000 steps
+    (a third then holds >= 333 windows), >= MIN_SEEDS runs.
+    """
+    key, claim = "8", "The self-model knows what will surprise it (predicted vs obtained curiosity)"
+    evidence = "sections 3.2, 5 (the self-model's role; no figure)"
+    s = presets.get("multi_agent")
+    if s is None:
+        return ClaimResult(key, claim, evidence, "n/a", _missing(("multi_agent",), presets))
+    d = self_model_tracking(s)
+    early, late, base = mean_ci(d["self_early"]), mean_ci(d["self_late"]), mean_ci(d["base_late"])
+    rise, edge = mean_ci(d["rise"]), mean_ci(d["edge"])
+    n = int(np.isfinite(d["rise"] + d["edge"]).sum())
+    values = {"z self early": _num(early[0]), "z self late": _num(late[0]), "z baseline late": _num(base[0]),
+              "rise": _num(rise[0]), "rise low": _num(rise[1]), "edge": _num(edge[0]), "edge low": _num(edge[1]),
+              "runs": n}
+    stat = (f"{s.name}, runs: {n}, 20-step window means detrended: Fisher z of corr(predicted, obtained) first third "
+            f"{_ci(early)}, last third {_ci(late)}; action-running-mean baseline, last third {_ci(base)}; rise "
+            f"{_ci(rise)}, edge over baseline {_ci(edge)}. Per-step pairs are not recorded (only window means and "
+            "`curiosity_sample`, with no matching prediction)")
+    gap = _scale_gap(s, 20_000, {"runs": n})
+    fails = [] if rise[1] > 0 else ["the correlation does not rise significantly"]
+    fails += [] if edge[1] > 0 else ["the self-model does not beat the baseline significantly"]
+    return ClaimResult(key, claim, evidence, stat, _decide([gap] if gap else [], fails, "both CIs above 0"), values)
+
+
+def self_model_tracking(sweep: Sweep, window: int = SMOOTH, history: int = SMOOTH, ridge: float = 1.0) -> dict:
+    """Per run (agents averaged on Fisher's z scale): {"self_early", "self_late", "base_late",
+    "rise", "edge"} (arrays [runs]), as `claim_self_model_predicts` defines them."""
+    cur = sweep.metrics["curiosity"].astype(float)  # [R, W, A]
+    pred = sweep.metrics["predicted"].astype(float)
+    counts = sweep.metrics["action_counts"].astype(float)  # [R, W, A, actions]
+    base = running_action_baseline(cur, counts, history, ridge)
+    detrend = lambda x: x - moving_average(x, window, axis=1)  # noqa: E731
+    cur_d, pred_d, base_d = detrend(cur), detrend(pred), detrend(base)
+    n_w = cur.shape[1]
+    third = n_w // 3
+    first, last = slice(0, third), slice(n_w - third, n_w)
+    r, a = cur.shape[0], cur.shape[2]
+    z = {k: np.full((r, a), np.nan) for k in ("self_early", "self_late", "base_late")}
+    if third >= 3:
+        for i in range(r):
+            for j in range(a):
+                z["self_early"][i, j] = fisher_z(pearson_r(pred_d[i, first, j], cur_d[i, first, j]))
+                z["self_late"][i, j] = fisher_z(pearson_r(pred_d[i, last, j], cur_d[i, last, j]))
+                z["base_late"][i, j] = fisher_z(pearson_r(base_d[i, last, j], cur_d[i, last, j]))
+    out = {k: _nanmean(v, axis=1) for k, v in z.items()}
+    out["rise"] = out["self_late"] - out["self_early"]
+    out["edge"] = out["self_late"] - out["base_late"]
+    return out
+
+
+def running_action_baseline(curiosity, action_counts, history: int = SMOOTH, ridge: float = 1.0) -> np.ndarray:
+    """The per-action running-mean predictor, from window data: [runs, windows, agents] prediction
+    of each window's mean curiosity = its action shares . m, where m (one value per action) solves
+    the ridge regression of the previous `history` windows' curiosity on their action shares,
+    shrunk (weight `ridge`, in windows) towards those windows' mean curiosity. NaN in window 0.
+    curiosity: [runs, windows, agents]; action_counts: [runs, windows, agents, actions]."""
+    y = np.asarray(curiosity, float)
+    c = np.asarray(action_counts, float)
+    x = c / np.maximum(c.sum(axis=-1, keepdims=True), 1)  # shares [R, W, A, K]
+    ok = np.isfinite(y) & (c.sum(axis=-1) > 0)
+    x0, y0 = np.where(ok[..., None], x, 0.0), np.where(ok, y, 0.0)
+    k = x.shape[-1]
+
+    def trailing(v):  # sum over the previous `history` windows (not this one), along axis 1
+        cs = np.concatenate([np.zeros_like(v[:, :1]), np.cumsum(v, axis=1)], axis=1)  # cs[w] = sum of v[:w]
+        w = np.arange(v.shape[1])
+        return cs[:, w] - cs[:, np.maximum(w - history, 0)]
+
+    xx = trailing(x0[..., :, None] * x0[..., None, :])  # [R, W, A, K, K]
+    xy = trailing(x0 * y0[..., None])  # [R, W, A, K]
+    ny = trailing(ok.astype(float))
+    sy = trailing(y0)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        prior = np.where(ny > 0, sy / np.maximum(ny, 1), np.nan)  # [R, W, A]
+    m = np.linalg.solve(xx + ridge * np.eye(k), (xy + ridge * np.nan_to_num(prior)[..., None])[..., None])[..., 0]
+    pred = (x * m).sum(axis=-1)
+    return np.where((ny > 0) & ok, pred, np.nan)
+
+
+def claim_observational_curiosity(presets: Mapping[str, Sweep]) -> ClaimResult:
+    """Claim 9: observational learning: an agent's curiosity rises while the other agent, or an
+    object moving without its touch, is in its view (sections 4.1.2, 5).
+
+    Measured on every run of multi_agent, per agent and 20-step window, when the agent itself
+    touched nothing: "watching" = the other agent or a moving object in view (view fraction > 0);
+    "quiet" = neither in view. An object moves in a window when its position at the window's end
+    is > 1 cm from the end of the window before (the window-end positions are all the metrics
+    hold; window 0 is left out). Curiosity is taken relative to the agent's trailing moving average
+    of 50 windows (as in `stats.observation_classes`), which removes the slow learning trend.
+    Per run: mean excess while watching - mean excess while quiet (windows of both agents pooled).
+    Verdict: holds if the 95% CI across runs lies above 0. Scale: runs of >= 10,000 steps (past the
+    initial fall), >= MIN_SEEDS runs with windows of both kinds.
+    """
+    key, claim = "9", "Observational learning: curiosity rises while the other agent or what it moves is in view"
+    evidence = "sections 4.1.2 (fig. 16, 45,000-47,000 steps of one run), 5 (videos)"
+    s = presets.get("multi_agent")
+    if s is None:
+        return ClaimResult(key, claim, evidence, "n/a", _missing(("multi_agent",), presets))
+    d = watching_excess(s)
+    w, q, diff = mean_ci(d["watching"]), mean_ci(d["quiet"]), mean_ci(d["diff"])
+    n = int(np.isfinite(d["diff"]).sum())
+    values = {"watching": _num(w[0]), "quiet": _num(q[0]), "diff": _num(diff[0]), "diff low": _num(diff[1]),
+              "runs": n, "watching windows": int(d["n_watching"]), "quiet windows": int(d["n_quiet"])}
+    stat = (f"{s.name}, runs: {n}: curiosity above the agent's moving average, own contact excluded, while the other "
+            f"agent or a moving object is in view {_ci(w)} ({d['n_watching']:,} windows), while neither is "
+            f"{_ci(q)} ({d['n_quiet']:,} windows); difference {_ci(diff)}")
+    gap = _scale_gap(s, 10_000, {"runs with both kinds of window": n})
+    fails = [] if diff[1] > 0 else ["watching does not raise curiosity significantly"]
+    return ClaimResult(key, claim, evidence, stat, _decide([gap] if gap else [], fails, "the CI above 0"), values)
+
+
+def watching_excess(sweep: Sweep, window: int = SMOOTH, moved_m: float = 0.01) -> dict:
+    """Per run: {"watching", "quiet", "diff"} mean excess curiosity (arrays [runs]) and the window
+    counts {"n_watching", "n_quiet"}, as `claim_observational_curiosity` defines them."""
+    if sweep.n_agents != 2:
+        raise ValueError(f"{sweep.path} has {sweep.n_agents} agent(s): watching another agent needs two")
+    k = len(sweep.objects)
+    pos = sweep.metrics["object_pos"].astype(float)  # [R, W, K, 3]
+    moved = np.zeros(pos.shape[:3], bool)
+    moved[:, 1:] = np.linalg.norm(np.diff(pos, axis=1), axis=-1) > moved_m  # NaN compares False
+    view = sweep.metrics["view_fraction"].astype(float)  # [R, W, 2, K + 1]
+    own = (sweep.metrics["contact_object"].sum(axis=3) > 0) | (sweep.metrics["contact_agent"] > 0)  # [R, W, 2]
+    moving_in_view = np.any(moved[:, :, None, :] & (view[..., :k] > 0), axis=3) | (view[..., k] > 0)
+    valid = np.zeros(own.shape, bool)
+    valid[:, 1:] = True
+    watching = valid & ~own & moving_in_view
+    quiet = valid & ~own & ~moving_in_view
+    cur = sweep.metrics["curiosity"].astype(float)
+    excess = cur - moving_average(cur, window, axis=1)
+    w = _nanmean(np.where(watching, excess, np.nan), axis=(1, 2))
+    q = _nanmean(np.where(quiet, excess, np.nan), axis=(1, 2))
+    return {"watching": w, "quiet": q, "diff": w - q, "n_watching": int(watching.sum()), "n_quiet": int(quiet.sum())}
+
+
+CLAIMS: tuple[Callable[[Mapping[str, Sweep]], ClaimResult], ...] = (
+    claim_curiosity_dip_and_rise, claim_contact_ranking, claim_two_agents_higher, claim_agents_move_together,
+    claim_prefers_moving_objects, claim_stop_least, claim_boltzmann_trembles, claim_temperatures_alike,
+    claim_self_model_predicts, claim_observational_curiosity,
+)
+
+
+def claim_results(sweeps) -> list[ClaimResult]:
+    """Every claim of `CLAIMS` tested on `sweeps` (see `assign_presets` for what they may be)."""
+    presets = assign_presets(sweeps)
+    return [f(presets) for f in CLAIMS]
+
+
+def claims_table(sweeps) -> Table:
+    """The claims table: one row per claim (the claim, the paper's evidence, our statistic, the
+    verdict), as a `tables.Table` (`to_markdown`, `to_csv`); `values` holds each row's numbers."""
+    presets = assign_presets(sweeps)
+    results = [f(presets) for f in CLAIMS]
+    cols = ["#", "claim", "paper's evidence", "our statistic", "verdict"]
+    rows = [[r.key, r.claim, r.evidence, r.statistic, r.verdict] for r in results]
+    values = [{"key": r.key, "claim": r.claim, "verdict": r.verdict, **r.values} for r in results]
+    keys = list(dict.fromkeys(k for v in values for k in v))
+    values = [{k: v.get(k) for k in keys} for v in values]
+    used = ", ".join(f"{p} = {s.name}" for p, s in presets.items()) or "none"
+    note = (f"Sweeps as presets: {used}. Means are across runs (seeds) with 95% Student-t intervals in brackets; "
+            f"p-values two-sided. holds: the paper's effect at the 5% level in its direction (claim 7: no significant "
+            f"difference); does not hold: at the needed scale, the effect is not significant (or reversed); not "
+            f"testable: a preset is missing, the metrics cannot show it, or the sweeps are too small (>= {MIN_SEEDS} "
+            "seeds per group and each claim's run length).")
+    return Table(cols, rows, values, note)
+
+
+# ---------------------------------------------------------------------------------- helpers
+
+
+def _finite(x) -> np.ndarray:
+    x = np.asarray(x, float).reshape(-1)
+    return x[np.isfinite(x)]
+
+
+def _nanmean(x, axis):
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", RuntimeWarning)
+        return np.nanmean(x, axis=axis)
+
+
+def _block_mean(sweep: Sweep, x: np.ndarray, start: int, end: int) -> np.ndarray:
+    """Mean over axis 1 of x [n, windows] of the windows lying wholly in steps [start, end);
+    NaN where none does."""
+    e = sweep.metrics_every
+    lo, hi = -(-int(start) // e), min(int(end) // e, x.shape[1])
+    if hi <= lo:
+        return np.full(x.shape[0], np.nan)
+    return _nanmean(x[:, lo:hi], axis=1)
+
+
+def _late_half(sweep: Sweep, x: np.ndarray) -> np.ndarray:
+    return _nanmean(x[:, x.shape[1] // 2:], axis=1)
+
+
+def _paper_group(sweep: Sweep, policy: str) -> Group | None:
+    """The group of `policy` at the paper's setting, else its first group; None if it has none."""
+    gs = sweep.groups(policy)
+    for g in gs:
+        if np.isclose(g.value, PAPER_SETTING[policy]):
+            return g
+    return gs[0] if gs else None
+
+
+def _source_groups(presets, sources) -> list[tuple[str, Sweep, Group]]:
+    out = []
+    for preset, policy, fig in sources:
+        s = presets.get(preset)
+        g = _paper_group(s, policy) if s is not None else None
+        if g is not None:
+            out.append((f"{s.name} {g.label} ({fig})", s, g))
+    return out
+
+
+def _missing(needed: Sequence[str], presets) -> str:
+    lacking = [p for p in needed if p not in presets]
+    return f"not testable: the {' and '.join(lacking)} sweep{'s are' if len(lacking) > 1 else ' is'} missing"
+
+
+def _scale_gap(sweep: Sweep, min_steps: int, ns: Mapping[str, int]) -> str | None:
+    """What the sweep lacks for a claim (run length, seeds), or None."""
+    return _scale_gaps([(sweep, min_steps, ns)])
+
+
+def _scale_gaps(items) -> str | None:
+    """What several (sweep, min_steps, {group label: runs}) lack, each shortfall said once."""
+    short: dict[int, dict[str, None]] = {}  # min steps -> "<sweep> has <steps>", each sweep once
+    small = []
+    for sweep, min_steps, ns in items:
+        if sweep.steps_done < min_steps:
+            short.setdefault(min_steps, {})[f"{sweep.name} has {sweep.steps_done:,}"] = None
+        small += [f"{label} {n}" for label, n in ns.items() if n < MIN_SEEDS]
+    gaps = [f"runs of >= {k:,} steps ({', '.join(v)})" for k, v in short.items()]
+    if small:
+        gaps.append(f">= {MIN_SEEDS} seeds per group; {', '.join(dict.fromkeys(small))}")
+    return "; ".join(gaps) or None
+
+
+def _decide(gaps: Sequence[str], fails: Sequence[str], rule: str) -> str:
+    if gaps:
+        return f"not testable at this scale (needs {'; '.join(gaps)})"
+    if fails:
+        return "does not hold: " + "; ".join(fails)
+    return f"holds ({rule})"
+
+
+def _num(x):
+    x = float(x)
+    return x if math.isfinite(x) else None
+
+
+def _f(x, digits: int = 3) -> str:
+    x = float(x)
+    if not math.isfinite(x):
+        return "n/a"
+    return f"{x:,.0f}" if abs(x) >= 1000 else f"{x:.{digits}g}"
+
+
+def _p(p) -> str:
+    p = float(p)
+    if not math.isfinite(p):
+        return "n/a"
+    return "<0.001" if p < 0.001 else f"{p:.3f}"
+
+
+def _ci(m, digits: int = 3) -> str:
+    """'mean [low, high] (n=...)' from a `mean_ci` tuple of scalars."""
+    mean, lo, hi, n = (float(v) for v in m)
+    if not math.isfinite(mean):
+        return "n/a"
+    fmt = (lambda v: f"{v:,.0f}") if digits == 0 else _f
+    band = f" [{fmt(lo)}, {fmt(hi)}]" if math.isfinite(lo) else ""
+    return f"{fmt(mean)}{band} (n={int(n)})"
+
+
+def _short(policy: str) -> str:
+    return {"eps": "ε-greedy", "boltzmann": "Boltzmann", "ucb": "UCB"}[policy]

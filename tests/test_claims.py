@@ -1,0 +1,309 @@
+"""The claims table (mjx_curio/analysis/claims.py): its tests against closed forms and hand
+computations, each claim's verdict on synthetic sweeps with a planted effect (and without it),
+and the whole table on the session's tiny sweeps."""
+
+import math
+import pathlib
+
+import numpy as np
+import pytest
+
+from mjx_curio import analysis as an
+from mjx_curio.analysis import claims as cl
+from mjx_curio.arena import ACTIONS, AGENT_NAMES, OBJECTS
+from mjx_curio.metrics import SCHEMA, VIEW_TARGETS
+
+# ------------------------------------------------------------------------- p-values vs closed forms
+
+
+@pytest.mark.parametrize("t", [0.0, 0.3, 1.0, 2.5, 12.7, -4.0])
+def test_t_pvalue_matches_closed_forms(t):
+    # df = 1 is the Cauchy distribution, df = 2 has a closed-form CDF as well.
+    assert cl.t_pvalue(t, 1) == pytest.approx(1 - 2 / math.pi * math.atan(abs(t)), abs=1e-12)
+    assert cl.t_pvalue(t, 2) == pytest.approx(1 - abs(t) / math.sqrt(2 + t * t), abs=1e-12)
+
+
+@pytest.mark.parametrize("f,d2", [(0.5, 3), (3.0, 6), (12.0, 6), (40.0, 17.5)])
+def test_f_pvalue_matches_closed_form(f, d2):
+    # With df1 = 2 the F tail is (1 + 2 f / d2) ** (-d2 / 2).
+    assert cl.f_pvalue(f, 2, d2) == pytest.approx((1 + 2 * f / d2) ** (-d2 / 2), rel=1e-10)
+
+
+def test_betainc_special_cases():
+    for x in (0.01, 0.3, 0.77, 0.999):
+        assert cl.betainc(3.5, 1, x) == pytest.approx(x**3.5, rel=1e-10)
+        assert cl.betainc(1, 2.5, x) == pytest.approx(1 - (1 - x) ** 2.5, rel=1e-10)
+        assert cl.betainc(2, 3, x) + cl.betainc(3, 2, 1 - x) == pytest.approx(1, abs=1e-12)
+
+
+def test_welch_t_two_by_two_by_hand():
+    # x, y each [-1, 1] shifted by d: variances 2, se^2 = 2/2 + 2/2 = 2, df = 4 / (1 + 1) = 2.
+    d = 3.0
+    w = cl.welch_t(np.array([-1.0, 1.0]) + d, np.array([-1.0, 1.0]))
+    t = d / math.sqrt(2)
+    assert w["diff"] == pytest.approx(d)
+    assert w["t"] == pytest.approx(t)
+    assert w["df"] == pytest.approx(2)
+    assert w["p"] == pytest.approx(1 - t / math.sqrt(2 + t * t))
+
+
+def test_welch_t_unequal_variances_by_hand():
+    x, y = np.array([1.0, 2.0, 3.0, 4.0]), np.array([2.0, 4.0, 6.0, 8.0, 10.0, np.nan])
+    vx, vy = 5 / 3 / 4, 10.0 / 5  # sample variances 5/3 and 10, over n
+    t = (2.5 - 6.0) / math.sqrt(vx + vy)
+    df = (vx + vy) ** 2 / (vx**2 / 3 + vy**2 / 4)
+    w = cl.welch_t(x, y)
+    assert (w["t"], w["df"], w["ny"]) == (pytest.approx(t), pytest.approx(df), 5)
+    try:  # an independent implementation where one is installed (scipy is not a dependency)
+        from scipy import stats as sps
+    except ImportError:
+        return
+    assert w["p"] == pytest.approx(sps.ttest_ind(x, y[:5], equal_var=False).pvalue, rel=1e-8)
+
+
+def test_one_way_anova_by_hand():
+    # Group means 2, 5, 8, grand mean 5: SS between = 3 * (9 + 0 + 9) = 54; SS within = 2 + 2 + 2 = 6;
+    # F = (54 / 2) / (6 / 6) = 27 on (2, 6) degrees of freedom; p = (1 + 2 * 27 / 6) ** -3 = 1e-3.
+    a = cl.one_way_anova([[1, 2, 3], [4, 5, 6], [7, 8, 9]])
+    assert a["F"] == pytest.approx(27.0)
+    assert (a["df1"], a["df2"]) == (2, 6)
+    assert a["p"] == pytest.approx(10.0**-3)
+    assert a["eta2"] == pytest.approx(54 / 60)
+    same = cl.one_way_anova([[1, 2, 3], [2, 1, 3], [3, 2, 1]])
+    assert same["F"] == pytest.approx(0.0) and same["p"] == pytest.approx(1.0)
+
+
+def test_pearson_r_known_values():
+    x = np.arange(10.0)
+    assert cl.pearson_r(x, 3 * x + 1) == pytest.approx(1.0)
+    assert cl.pearson_r(x, -x) == pytest.approx(-1.0)
+    # Orthogonal centred vectors: r = 0 exactly.
+    assert cl.pearson_r([1, -1, 1, -1], [1, 1, -1, -1]) == pytest.approx(0.0)
+    assert math.isnan(cl.pearson_r([1, 2], [3, 4]))
+
+
+# ------------------------------------------------------------------------------ synthetic sweeps
+
+
+def fake_sweep(name, n_agents, groups, n_windows, seeds=3, walls="same", preset="none", every=20):
+    """A `Sweep` built in memory: `groups` = [(policy, setting value)], `seeds` runs each, every
+    metric of the schema zero (floats: zero too) until a test sets it."""
+    runs = []
+    for policy, value in groups:
+        for seed in range(seeds):
+            setting = an.SETTINGS[policy][0]
+            row = dict(index=len(runs), name=f"{policy}-{value:g}-s{seed}", policy=policy, seed=seed, eps=0.2,
+                       temperature=1.5, ucb_c=1.0)
+            row[setting] = value
+            runs.append(row)
+    manifest = {"format": an.FORMAT, "runs": runs, "n_agents": n_agents, "agent_names": list(AGENT_NAMES[:n_agents]),
+                "actions": list(ACTIONS), "objects": list(OBJECTS), "view_targets": list(VIEW_TARGETS),
+                "metrics": {"every": every, "windows": n_windows},
+                "config": {"walls": walls, "preset": preset}, "run_config": {"image": 16}}
+    metrics = {k: np.zeros((len(runs), n_windows) + m.shape(n_agents), m.dtype) for k, m in SCHEMA.items()}
+    metrics["steps_taken"][:] = every
+    metrics["action_counts"][..., 0] = every
+    steps = (np.arange(n_windows) + 1) * every
+    return an.Sweep(pathlib.Path(name), manifest, {"windows_done": n_windows}, steps, metrics)
+
+
+POLICIES = [("eps", 0.2), ("boltzmann", 1.5), ("ucb", 1.0)]
+
+
+def test_assign_presets_by_settings_name_and_manifest():
+    multi = fake_sweep("multi", 2, POLICIES + [("boltzmann", 0.5)], 4)
+    single = fake_sweep("single", 1, [("eps", 0.2), ("ucb", 1.0)], 4)
+    walls = fake_sweep("whatever", 1, [("eps", 0.2)], 4, walls="different", preset="single_agent_walls_different")
+    got = cl.assign_presets([multi, single, walls])
+    assert got == {"single_agent": single, "single_agent_walls_different": walls, "multi_agent": multi,
+                   "boltzmann_temperatures": multi}
+    # A dict key naming a preset wins over the settings.
+    assert cl.assign_presets({"multi_agent_walls_different": multi}) == {"multi_agent_walls_different": multi}
+
+
+def test_missing_presets_make_every_row_not_testable_with_the_name():
+    table = cl.claims_table({})
+    assert [v["key"] for v in table.values] == ["1", "2", "3", "4", "5", "6a", "6b", "7", "8", "9"]
+    for v in table.values:
+        assert v["verdict"].startswith("not testable: the ") and "missing" in v["verdict"]
+    assert "boltzmann_temperatures sweep is missing" in table.values[7]["verdict"]
+
+
+def test_contact_ranking_finds_a_planted_order_and_rejects_its_reverse():
+    rng = np.random.default_rng(0)
+    s = fake_sweep("multi_agent", 2, POLICIES, 2000, seeds=4)  # 40,000 steps
+    planted_obj = {"eps": 500, "boltzmann": 100, "ucb": 1000}  # total contact steps per run
+    planted_agt = {"eps": 30, "boltzmann": 150, "ucb": 300}
+    totals = {}
+    for g in s.groups():
+        for i in g.indices:
+            obj = planted_obj[g.policy] + int(rng.integers(-20, 21))
+            agt = planted_agt[g.policy] + int(rng.integers(-10, 11))
+            s.metrics["contact_object"][i, :obj, 0, 2] = 1  # one contact step per window, agent 0, sphere
+            s.metrics["contact_agent"][i, :agt, :] = 1  # both agents see each agent-agent contact
+            totals.setdefault(g.policy, []).append((obj, agt))
+    r = cl.claim_contact_ranking({"multi_agent": s})
+    assert r.verdict.startswith("holds"), r.verdict
+    for p, rows in totals.items():
+        assert r.values[f"objects {p}"] == pytest.approx(np.mean([o for o, _ in rows]))
+        assert r.values[f"agent-agent {p}"] == pytest.approx(np.mean([a for _, a in rows]))
+    # UCB and eps swapped: UCB is no longer the most in touch with objects.
+    swap = {0: 2, 1: 1, 2: 0}
+    order = np.concatenate([s.groups()[swap[k]].indices for k in range(3)])
+    s.metrics["contact_object"][:] = s.metrics["contact_object"][order]
+    r = cl.claim_contact_ranking({"multi_agent": s})
+    assert r.verdict.startswith("does not hold") and "objects UCB > ε" in r.verdict, r.verdict
+
+
+def test_temperatures_anova_on_planted_late_curiosity():
+    s = fake_sweep("boltzmann_temperatures", 2, [("boltzmann", t) for t in (0.5, 1.5, 2.5)], 2000, seeds=3)
+    late = np.array([1, 2, 3, 4, 5, 6, 7, 8, 9], float)  # the ANOVA of test_one_way_anova_by_hand
+    s.metrics["curiosity"][:] = 5.0  # the first three quarters: anything
+    s.metrics["curiosity"][:, 1500:, :] = late[:, None, None]
+    r = cl.claim_temperatures_alike({"boltzmann_temperatures": s})
+    assert r.values["F"] == pytest.approx(27.0) and r.values["p"] == pytest.approx(1e-3)
+    assert r.verdict.startswith("does not hold"), r.verdict
+    s.metrics["curiosity"][:, 1500:, :] = np.array([1, 2, 3, 2, 1, 3, 3, 2, 1], float)[:, None, None]
+    r = cl.claim_temperatures_alike({"boltzmann_temperatures": s})
+    assert r.values["F"] == pytest.approx(0.0) and r.verdict.startswith("holds"), r.verdict
+    short = fake_sweep("boltzmann_temperatures", 2, [("boltzmann", t) for t in (0.5, 1.5)], 100, seeds=2)
+    r = cl.claim_temperatures_alike({"boltzmann_temperatures": short})
+    assert r.verdict.startswith("not testable at this scale (needs runs of >= 40,000 steps"), r.verdict
+
+
+def test_agents_move_together_against_other_runs():
+    rng = np.random.default_rng(1)
+    s = fake_sweep("multi_agent", 2, POLICIES, 600, seeds=3)  # 12,000 steps
+    walks = np.cumsum(rng.normal(size=(s.n_runs, 600)), axis=1)  # each run its own course of events
+    s.metrics["curiosity"][:] = (walks[:, :, None] + 0.1 * rng.normal(size=(s.n_runs, 600, 2))).astype(np.float32)
+    d = cl.agent_curiosity_coupling(s)
+    assert np.all(np.tanh(d["within"]) > 0.99)
+    r = cl.claim_agents_move_together({"multi_agent": s})
+    assert r.verdict.startswith("holds"), r.verdict
+    # Agent 1 of each run on a course of its own: no closer to agent 0 than agents of other runs are.
+    s.metrics["curiosity"][:, :, 1] = np.cumsum(rng.normal(size=(s.n_runs, 600)), axis=1)
+    r = cl.claim_agents_move_together({"multi_agent": s})
+    assert r.verdict.startswith("does not hold"), r.verdict
+
+
+def test_dip_and_rise_found_when_planted_not_in_noise():
+    rng = np.random.default_rng(2)
+    s = fake_sweep("multi_agent", 2, POLICIES, 4000, seeds=4)  # 80,000 steps
+    steps = s.steps - 10
+    shape = np.where(steps < 5_000, 1.0, np.where(steps < 30_000, 0.55, 0.55 + 0.1 * (steps - 30_000) / 50_000))
+    noise = lambda: 0.05 * rng.normal(size=s.metrics["curiosity"].shape)  # noqa: E731
+    s.metrics["curiosity"][:] = shape[None, :, None] + noise()
+    d = cl.curiosity_fall_rise(s, s.groups("eps")[0])
+    assert d["fall"] == pytest.approx(np.full(4, 0.45), abs=0.01)
+    assert d["rise"] == pytest.approx(np.full(4, 0.1 * 0.9), abs=0.01)  # late block: steps 70k-80k
+    r = cl.claim_curiosity_dip_and_rise({"multi_agent": s})
+    assert r.verdict.startswith("holds"), r.verdict
+    s.metrics["curiosity"][:] = 0.6 + noise()  # flat
+    r = cl.claim_curiosity_dip_and_rise({"multi_agent": s})
+    assert r.verdict.startswith("does not hold"), r.verdict
+
+
+def test_running_action_baseline_recovers_per_action_means():
+    rng = np.random.default_rng(3)
+    counts = rng.multinomial(20, np.full(7, 1 / 7), size=(2, 300, 2)).astype(np.int32)  # [R, W, A, actions]
+    m_true = np.linspace(0.2, 0.8, 7)
+    cur = (counts / 20.0) @ m_true  # every window's curiosity is its action mix times the per-action means
+    base = cl.running_action_baseline(cur, counts, history=50, ridge=1e-9)
+    assert np.all(np.isnan(base[:, 0]))
+    np.testing.assert_allclose(base[:, 20:], cur[:, 20:], rtol=1e-5)
+
+
+def test_self_model_claim_on_planted_predictions():
+    rng = np.random.default_rng(4)
+    s = fake_sweep("multi_agent", 2, POLICIES, 1200, seeds=1)  # 24,000 steps, 3 runs
+    shape = s.metrics["curiosity"].shape
+    cur = 0.6 + 0.1 * rng.normal(size=shape)
+    s.metrics["curiosity"][:] = cur
+    s.metrics["action_counts"][:] = rng.multinomial(20, np.full(7, 1 / 7), size=shape)  # unrelated to curiosity
+    pred = 0.6 + 0.1 * rng.normal(size=shape)  # early: knows nothing
+    pred[:, 400:] = cur[:, 400:] + 0.02 * rng.normal(size=(3, 800, 2))  # later: knows the outcome
+    s.metrics["predicted"][:] = pred
+    d = cl.self_model_tracking(s)
+    assert np.all(np.abs(np.tanh(d["self_early"])) < 0.2) and np.all(np.tanh(d["self_late"]) > 0.95)
+    assert np.all(np.abs(np.tanh(d["base_late"])) < 0.2)
+    r = cl.claim_self_model_predicts({"multi_agent": s})
+    assert r.verdict.startswith("holds"), r.verdict
+
+
+def test_observational_curiosity_on_planted_windows():
+    rng = np.random.default_rng(5)
+    s = fake_sweep("multi_agent", 2, POLICIES, 600, seeds=1)
+    shape = s.metrics["curiosity"].shape  # [R, W, 2]
+    sees_other = rng.random(shape) < 0.3
+    s.metrics["view_fraction"][..., -1] = np.where(sees_other, 0.2, 0.0)
+    s.metrics["curiosity"][:] = 0.5 + 0.01 * rng.normal(size=shape) + 0.05 * sees_other
+    d = cl.watching_excess(s)
+    assert d["diff"] == pytest.approx(np.full(3, 0.05), abs=0.01)
+    assert cl.claim_observational_curiosity({"multi_agent": s}).verdict.startswith("holds")
+    # A moving object in view counts as watching too; one the agent touched itself does not.
+    s.metrics["view_fraction"][..., -1] = 0.0
+    s.metrics["view_fraction"][..., 2] = 0.1  # the sphere always in view ...
+    s.metrics["object_pos"][:, :, 2, 0] = np.cumsum(np.where(sees_other[:, :, 0], 0.05, 0.0), axis=1)  # ... moving
+    s.metrics["curiosity"][:, :, 1] = 0.5 + 0.01 * rng.normal(size=shape[:2])  # agent 1 is not watched by design
+    s.metrics["contact_object"][:, :, 1, 2] = 1  # agent 1 touches the sphere: its windows are excluded
+    d = cl.watching_excess(s)
+    assert d["n_watching"] == int(sees_other[:, 1:, 0].sum())
+    assert d["diff"] == pytest.approx(np.full(3, 0.05), abs=0.01)
+
+
+def test_stop_least_and_trembling_stand_in():
+    s = fake_sweep("multi_agent", 2, POLICIES, 1000, seeds=3)  # 20,000 steps
+    a = s.metrics["action_counts"]
+    a[:] = 0
+    a[..., :6] = 3  # six moves three times a window each ...
+    a[..., 6] = 2  # ... stop twice
+    b = s.groups("boltzmann")[0].indices
+    a[b, :, :, 4:6] = 5  # Boltzmann: rotate left and right five times each a window
+    a[b, :, :, :4] = 2
+    a[b, :, :, 6] = 2
+    r = cl.claim_stop_least({"multi_agent": s})
+    assert r.values[next(k for k in r.values if k.endswith("stop share"))] == pytest.approx(2 / 20)
+    # eps runs are identical across seeds: the CI is the point 1/20, above 0.
+    assert r.verdict.startswith("holds"), r.verdict
+    bal = cl.balanced_rotation_share(s)
+    assert bal[b] == pytest.approx(np.full(3, 10 / 20)) and bal[s.groups("eps")[0].indices] == pytest.approx(6 / 20)
+    # Identical seeds have no spread: Welch's t is undefined, so not significant; a little spread fixes that.
+    a[b[0], :, 0, 4] += 1
+    a[b[1], :, 1, 5] += 1
+    r = cl.claim_boltzmann_trembles({"multi_agent": s})
+    assert r.verdict.startswith("not testable: per-step action order is not recorded"), r.verdict
+
+
+def test_prefers_moving_objects_share():
+    s = fake_sweep("single_agent", 1, [("eps", 0.2)], 2000, seeds=3)
+    c = s.metrics["contact_object"]
+    c[:, :300, 0, OBJECTS.index("sphere")] = 1
+    c[:, :100, 0, OBJECTS.index("cylinder")] = 1
+    c[:, :100, 0, OBJECTS.index("disc")] = 1
+    r = cl.claim_prefers_moving_objects({"single_agent": s})
+    assert r.values["contact share"] == pytest.approx(400 / 500)
+    assert r.verdict.startswith("holds"), r.verdict
+
+
+# ------------------------------------------------------------------------------ the tiny sweeps
+
+
+def test_claims_table_on_the_tiny_sweeps(tiny_sweeps_dir):
+    table = an.claims_table(tiny_sweeps_dir)
+    md = table.to_markdown()
+    assert [v["key"] for v in table.values] == ["1", "2", "3", "4", "5", "6a", "6b", "7", "8", "9"]
+    assert len(table.rows) == len(cl.CLAIMS) and all(len(r) == len(table.columns) for r in table.rows)
+    for v in table.values:
+        assert v["verdict"].startswith(cl.VERDICTS), v["verdict"]
+        # 200 steps and 1-2 seeds: too small for any claim, and the table must say so.
+        assert v["verdict"].startswith("not testable at this scale (needs runs of >= "), v["verdict"]
+        assert "multi has 200)" in v["verdict"] or "single has 200)" in v["verdict"], v["verdict"]
+        for k, x in v.items():
+            if k not in ("key", "claim", "verdict") and x is not None:
+                assert math.isfinite(x), (v["key"], k, x)
+    assert "Sweeps as presets: single_agent = single, multi_agent = multi, boltzmann_temperatures = multi" in md
+    # The statistics that 200 steps allow are computed.
+    by_key = {v["key"]: v for v in table.values}
+    assert by_key["3"]["curiosity single"] is not None and by_key["3"]["curiosity multi"] is not None
+    assert by_key["4"]["within z"] is not None and by_key["7"]["F"] is not None
+    print(md)
