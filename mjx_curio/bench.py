@@ -55,10 +55,11 @@ import mujoco
 import optax
 
 from mjx_curio import arena as arena_lib
+from mjx_curio import host_devices
 from mjx_curio import profile as profile_lib
 from mjx_curio import world_model as wm
 from mjx_curio.cli import Key, as_choice, as_int, main_guard
-from mjx_curio.config import LATENT_MODES, ConfigError, LearnerConfig
+from mjx_curio.config import LATENT_MODES, AutoOr, ConfigError, Int, LearnerConfig
 
 PROG = "mjx_curio.bench"
 SUMMARY = ("Throughput figures: what=env (physics + rendering), learner (VAE / learner updates), sweep (whole runs) "
@@ -278,8 +279,9 @@ def bench_sweep(args: dict) -> dict:
     devices = jax.devices()
     loop = args["runs_loop"] if args["runs_loop"] != "auto" else ("map" if devices[0].platform == "cpu" else "vmap")
     old = args["fidelity"] == "legacy"
+    settings = {"latents": args["latents"], **(config_lib.legacy_settings(LearnerConfig) if old else {})}
     learner = LearnerConfig(image=args["image"], n_agents=args["agents"], batch=args["batch"], seq_len=args["seq_len"],
-                            latents=args["latents"], **(config_lib.legacy_settings(LearnerConfig) if old else {}))
+                            **settings)
     cfg = run_lib.RunConfig(n_agents=args["agents"], image=args["image"], buffer=args["buffer"],
                             update_every=args["update_every"], metrics_every=args["update_every"], runs_loop=loop,
                             learner=learner, **(config_lib.legacy_settings(run_lib.RunConfig) if old else {}))
@@ -345,13 +347,16 @@ KEYS = [
     Key("vae_batch", 32, "learner: frames per VAE update", as_int(1)),
     Key("batch", 16, "learner, sweep, profile: sequences per learner update", as_int(1)),
     Key("seq_len", 16, "learner, sweep, profile: transitions per sequence", as_int(2)),
-    Key("latents", "stored", "learner, sweep, profile: " + " | ".join(LATENT_MODES), as_choice(LATENT_MODES)),
+    Key("latents", LearnerConfig().latents, "learner, sweep, profile: " + " | ".join(LATENT_MODES)
+        + " (sweep with fidelity=legacy: stored, as before the paper-faithful defaults)", as_choice(LATENT_MODES)),
     Key("update_every", 4, "sweep, profile: agent steps between learner updates", as_int(1)),
     Key("buffer", 10_000, "sweep, profile: replay capacity per run", as_int(3)),
     Key("parts", tuple(name for name, _ in profile_lib.COMPONENTS), "profile: components to profile",
         as_choice(tuple(name for name, _ in profile_lib.COMPONENTS)), many=True),
     Key("peak_n", 2048, "profile: side of the float32 matmul that measures the achievable peak", as_int(16)),
     Key("runs_loop", "auto", "sweep: map | vmap | auto (map on CPU)", as_choice(("auto", "map", "vmap"))),
+    Key("host_devices", "auto", "sweep: CPU devices the runs are spread over, auto (one per physical core, at most "
+        "one per run, as the sweep) or a number; the other benches time one program on one device", AutoOr(Int(1))),
     Key("fidelity", "paper", "sweep: paper (the defaults) | legacy (the settings before the paper-faithful defaults: "
         "square camera, mean latents, summed curiosity, unit pair friction, free bits) | both, one after the other",
         as_choice(("paper", "legacy", "both"))),
@@ -375,6 +380,17 @@ def _validate(args: dict) -> None:
         LearnerConfig(image=args["image"], n_agents=1, batch=args["vae_batch"])
 
 
+def _spread_over_cores(args: dict) -> None:
+    """The CPU device count, fixed before JAX starts: as the sweep would choose it for
+    what=sweep (host_devices.py), one device for the single-program benches."""
+    requested = args["host_devices"]
+    if args["what"] == "sweep":
+        count = host_devices.choose(requested, args["runs"])
+    else:
+        count = 1 if requested == "auto" else requested
+    host_devices.apply(count, requested)
+
+
 def summary(result: dict, indent: str = "") -> str:
     """The result dict as aligned `name: value` lines, nested dicts as indented sections."""
     lines = []
@@ -393,6 +409,7 @@ def main(argv=None) -> dict | None:
         return None
     try:
         _validate(args)
+        _spread_over_cores(args)
     except ConfigError as err:
         print(f"error: {err}", file=sys.stderr)
         raise SystemExit(2) from None
