@@ -206,7 +206,10 @@ def test_self_model_learns_which_action_yields_the_largest_error():
 # The learner update
 # ----------------------------------------------------------------------------------------
 
+# latents="stored": most tests here plant the latents the MDN-RNN trains on (Batch.latents);
+# the default, "reencode", has tests of its own below.
 SMALL = LearnerConfig(
+    latents="stored",
     image=8,
     n_agents=2,
     latent=4,
