@@ -330,8 +330,12 @@ def profile(args: dict, time_fn) -> dict:
         return adam(g, st, p), loss
 
     measure("vae_update", vae_update, (learner.vae, learner.vae_opt, batch.frames, ks[8]), 1.0 / ue)
-    measure("reencode", lambda p, f, k: jax.lax.stop_gradient(wm.latent(lc, p, f, k)),
-            (learner.vae, batch.frames, ks[9]), 1.0 / ue if lc.latents == "reencode" else 0.0)
+    # learner_update's re-encoding: the frames of the sample but the one per sequence and agent
+    # whose posterior the VAE update just computed (world_model.reencoded_latents)
+    t_pick = jax.random.randint(ks[9], (b,), 0, t1)
+    posterior = (jnp.zeros((b, n, lc.latent)),) * 2
+    measure("reencode", lambda p, f, t, q, k: wm.reencoded_latents(lc, p, f, t, q, k),
+            (learner.vae, batch.frames, t_pick, posterior, ks[9]), 1.0 / ue if lc.latents == "reencode" else 0.0)
     carry0 = jax.tree.map(lambda x: x[:, 0], batch.carry)
 
     def mdn_update(p, st, carry0, z, a):  # learner_update's MDN-RNN part (on the stored latents)
