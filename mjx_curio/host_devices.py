@@ -10,8 +10,9 @@ The count must be fixed before JAX starts its CPU backend (XLA reads
 reading their command line and before their first JAX computation. The rule (`choose`):
 - a number given on the command line wins (`host_devices=1`: one device, the old behaviour);
 - else a count the user put in XLA_FLAGS themselves;
-- else, resuming a sweep made on the CPU, the count it was made with (its checkpoints hold as
-  many padding runs as that count required; see program.py);
+- else, resuming a sweep made on the CPU, the count it was made with: the same program then
+  continues the runs bit for bit as if they had never stopped (another count is another program,
+  see run.py), and the checkpoints hold as many padding runs as that count required;
 - else one device per physical core, but never more devices than runs: a device with only a
   padding run would compute it for nothing, and the run alone would lose the cores it could use.
 Runs that do not divide evenly are padded with copies of run 0 whose results are dropped
