@@ -223,24 +223,37 @@ def test_sharding_gives_every_device_its_own_runs_with_their_own_keys(tiny_sweep
     whose float rounding may differ in the last bit; along a chaotic run such differences grow
     (on one CPU, 35 of 160 curiosity windows parted by up to 14 % within 200 steps), so only two
     things are compared: (1) the first metrics window, 20 steps, before rounding can have grown:
-    the same actions and contacts, floats to 1e-4 (measured: 3e-6), while a run on the wrong
-    device slot, or with another key, differs at O(1) from its first step; (2) what involves no
-    float at all: every run's random stream, step count and policy settings after 200 steps."""
+    the same actions and contacts, floats to 1e-4 (measured: equal but for the predictions,
+    9e-8), the memory's and self-models' training losses to 1e-2 (see `LOSS_RTOL`), while a run
+    on the wrong device slot, or with another key, differs at O(1) from its first step (its
+    curiosity by 7 %, measured); (2) what involves no float at all: every run's random stream,
+    step count and policy settings after 200 steps."""
     manifest = json.loads((sharded_sweep / "manifest.json").read_text())
     assert manifest["device"]["count"] == 2 and manifest["padded_runs"] == 0
     assert_same_runs_on_other_devices(sharded_sweep, tiny_sweep, "2 devices vs 1")
 
 
+# The MDN-RNN trains on the replay frames re-encoded by the current VAE (latents=reencode): an
+# encoder pass over 512 frames per update whose sums run in an order that depends on how many
+# threads a device has, and Adam turns last-bit gradient differences near zero into steps of
+# the learning rate's size. Measured on the first window of TINY_SWEEP, 2 devices vs 1 (AMD
+# EPYC): nll 5.1e-4, self_loss 1.7e-3, self_loss_agents 2.2e-3 relative; every other metric,
+# curiosity included, equal.
+LOSS_RTOL = {"nll": 1e-2, "self_loss": 1e-2, "self_loss_agents": 1e-2}
+
+
 def assert_same_runs_on_other_devices(out, reference, what: str):
     """`out` holds the runs of `reference` (a sweep of the same runs on another number of devices
     or processes): the same runs in the same order, the same first metrics window (integers
-    exactly, floats to 1e-4), and the same random streams, step counts and settings at the end."""
+    exactly, floats to 1e-4, the memory's and self-models' losses to LOSS_RTOL), and the same
+    random streams, step counts and settings at the end."""
     assert json.loads((out / "manifest.json").read_text())["runs"] == json.loads((reference / "manifest.json").read_text())["runs"]
     first = (slice(None), slice(0, 1))
     a, b = _metrics(out, first), _metrics(reference, first)
     for name in SCHEMA:
         if np.issubdtype(b[name].dtype, np.floating):
-            np.testing.assert_allclose(a[name], b[name], rtol=1e-4, atol=1e-6, err_msg=f"{what}, first window: {name}")
+            np.testing.assert_allclose(a[name], b[name], rtol=LOSS_RTOL.get(name, 1e-4), atol=1e-6,
+                                       err_msg=f"{what}, first window: {name}")
         else:
             np.testing.assert_array_equal(a[name], b[name], err_msg=f"{what}, first window: {name}")
     end = int(np.load(reference / "metrics" / "steps.npy")[-1])
@@ -249,9 +262,10 @@ def assert_same_runs_on_other_devices(out, reference, what: str):
         _assert_same_tree(a[leaf], b[leaf], f"{what}, after {end} steps: {leaf}")
 
 
-def _poison_replay_latents(monkeypatch, run: int, at_step: int):
-    """Fill run `run`'s stored replay latents with NaN when the sweep reaches `at_step`, so its
-    next MDN-RNN loss is NaN: the program's chunk wrapped for this test only."""
+def _poison_replay_carry(monkeypatch, run: int, at_step: int):
+    """Fill run `run`'s stored LSTM states in replay with NaN when the sweep reaches `at_step`:
+    its next MDN-RNN BPTT starts from one, so the loss is NaN (whatever latents it trains on).
+    The program's chunk wrapped for this test only."""
     import jax.numpy as jnp
 
     from mjx_curio import program
@@ -260,9 +274,10 @@ def _poison_replay_latents(monkeypatch, run: int, at_step: int):
 
     def chunk(self, states):
         if int(np.asarray(states.step)[0]) == at_step:
-            latents = states.replay.latents
-            bad = (jnp.arange(latents.shape[0]) == run)[:, None, None, None]
-            states = states._replace(replay=states.replay._replace(latents=jnp.where(bad, jnp.nan, latents)))
+            c, h = states.replay.carry
+            bad = (jnp.arange(c.shape[0]) == run)[:, None, None]
+            carry = (jnp.where(bad, jnp.nan, c), jnp.where(bad, jnp.nan, h))
+            states = states._replace(replay=states.replay._replace(carry=carry))
         return real(self, states)
 
     monkeypatch.setattr(program.SweepProgram, "chunk", chunk)
@@ -271,7 +286,7 @@ def _poison_replay_latents(monkeypatch, run: int, at_step: int):
 def test_a_nan_loss_halts_that_run_only_and_keeps_its_last_good_state(tiny_sweep, tmp_path, monkeypatch):
     out = tmp_path / "nan"
     bad = 3
-    _poison_replay_latents(monkeypatch, run=bad, at_step=100)
+    _poison_replay_carry(monkeypatch, run=bad, at_step=100)
     rc, stderr = sweep_in_process(*TINY_SWEEP, f"out={out}", check=False)
     assert rc == 1, stderr[-2000:]
     name = json.loads((out / "manifest.json").read_text())["runs"][bad]["name"]
