@@ -456,8 +456,8 @@ class SweepConfig:
                           Choice(("auto",) + RUNS_LOOPS), group=_RUN)
     distributed: str = knob("auto", "jax.distributed.initialize() first: true, false, auto (when a cluster is detected)",
                             Choice(("auto", "true", "false")), resume_free=True, group=_RUN)
-    host_devices: Any = knob("auto", "CPU devices the runs are spread over: auto (one per physical core, at most one "
-                             "per run; a resumed sweep keeps its count) or a number", AutoOr(Int(1)),
+    host_devices: Any = knob("auto", "CPU devices the runs are spread over: auto (the most, at most one per physical "
+                             "core, that divide the runs evenly; a resumed sweep keeps its count) or a number", AutoOr(Int(1)),
                              resume_free=True, group=_RUN)
     compile_cache: str = knob("~/.cache/mjx_curio/xla", "persistent XLA compilation cache directory, or none", Text(),
                               resume_free=True, group=_RUN)

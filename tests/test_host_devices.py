@@ -24,11 +24,16 @@ def test_physical_cores_counts_each_core_once():
     assert 1 <= cores <= len(os.sched_getaffinity(0))
 
 
-def test_auto_is_one_device_per_core_and_never_more_than_the_runs(no_flag, monkeypatch):
+def test_auto_is_the_most_devices_the_cores_allow_without_padding(no_flag, monkeypatch):
     monkeypatch.setattr(host_devices, "physical_cores", lambda: 8)
     assert host_devices.choose("auto", n_runs=24) == 8
-    assert host_devices.choose("auto", n_runs=3) == 3  # a device with only padding would idle a run's cores
+    assert host_devices.choose("auto", n_runs=3) == 3  # never more devices than runs
     assert host_devices.choose("auto", n_runs=1) == 1
+    assert host_devices.choose("auto", n_runs=20) == 5  # 8 would pad 4 runs: 5 devices of 4 runs
+    assert host_devices.choose("auto", n_runs=7) == 7
+    monkeypatch.setattr(host_devices, "physical_cores", lambda: 2)
+    assert host_devices.choose("auto", n_runs=24) == 2
+    assert host_devices.choose("auto", n_runs=9) == 1  # 2 devices would pad one run
 
 
 def test_what_the_user_set_wins(no_flag, monkeypatch):
