@@ -2,7 +2,7 @@
 `--help`, the manifest and the resume check.
 
 A knob is a dataclass field made with `knob(default, help, kind)`. Its *kind* (`Int`, `Float`,
-`Choice`, `Bool`, `Text`, `ListOf`) reads the text a user types after `key=` and checks a value;
+`Choice`, `Bool`, `Text`, `ListOf`, `AutoOr`) reads the text a user types after `key=` and checks a value;
 the same check runs when a dataclass is built in code (`__post_init__` calls `check_knobs`), so
 a value is judged by one rule wherever it comes from. Every check raises `ConfigError` naming the
 knob and what is allowed, before any work starts or any file is written.
@@ -201,18 +201,17 @@ class AutoOr:
     item: Any
 
     def check(self, name: str, value: Any) -> Any:
+        return self._or_auto(self.item.check, name, value)
+
+    def parse(self, name: str, text: str) -> Any:
+        return self._or_auto(self.item.parse, name, text)
+
+    @staticmethod
+    def _or_auto(read, name: str, value: Any) -> Any:
         if value == "auto":
             return value
         try:
-            return self.item.check(name, value)
-        except ConfigError as err:
-            raise ConfigError(f"{err}; or auto") from None
-
-    def parse(self, name: str, text: str) -> Any:
-        if text == "auto":
-            return text
-        try:
-            return self.item.parse(name, text)
+            return read(name, value)
         except ConfigError as err:
             raise ConfigError(f"{err}; or auto") from None
 

@@ -81,10 +81,10 @@ def init_params(module: nn.Module, key, *args, method=None):
 def _conv2x2_conv(x, w):
     """conv2x2's forward as an XLA convolution: the form for one kernel. Plain VALID: an
     older version padded the rows on the CPU to keep the convolution away from YNNPACK, but
-    with YNNPACK's fusions off (mjx_curio/__init__.py) the plain form measured faster (the
-    encoder's forward pass on 512 frames at 64 px, 2-core AMD EPYC: 158 ms against 191 ms
-    padded; the VAE update's gradient on 32 frames: the same within noise), and the padding
-    cost up to twice the FLOPs in the deep layers (2 output rows computed as 4)."""
+    with YNNPACK's fusions off (mjx_curio/__init__.py) the plain form is faster, and the
+    padding cost up to twice the FLOPs in the deep layers (2 output rows computed as 4).
+    `python -m mjx_curio.bench what=sweep runs=24 steps=100 repeats=1` on the 2-core AMD EPYC,
+    the defaults: 21.5 run-steps/s against 17.8 padded (docs/cost_model.md has the profile)."""
     return lax.conv_general_dilated(x, w, (1, 1), "VALID", dimension_numbers=_DN)
 
 

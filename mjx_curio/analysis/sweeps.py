@@ -29,11 +29,14 @@ from typing import Any, Sequence
 
 import numpy as np
 
+from mjx_curio.plan import RunSpec
+
 FORMAT = "mjx_curio.sweep/1"
 SWEEP_OUTPUTS = ("manifest.json", "progress.json", "metrics", "checkpoints")  # what a sweep writes
 
 POLICY_LABELS = {"eps": "ε-greedy", "boltzmann": "Boltzmann", "ucb": "UCB"}
 SETTINGS = {"eps": ("eps", "ε"), "boltzmann": ("temperature", "T"), "ucb": ("ucb_c", "c")}
+TABLE_COLUMNS = ("index", "name", "policy", "seed", "eps", "temperature", "ucb_c")
 
 
 class SweepError(ValueError):
@@ -45,16 +48,11 @@ class SweepError(ValueError):
 
 
 @dataclasses.dataclass(frozen=True)
-class Run:
-    """One row of a sweep's runs table (manifest `runs`, in the order of the metrics' first axis)."""
+class Run(RunSpec):
+    """One row of a sweep's runs table (manifest `runs`, in the order of the metrics' first axis):
+    the plan's RunSpec (policy, seed, settings, and its `name`) and its index."""
 
     index: int
-    name: str
-    policy: str
-    seed: int
-    eps: float
-    temperature: float
-    ucb_c: float
 
     @property
     def setting(self) -> tuple[str, float]:
@@ -109,7 +107,7 @@ class Sweep:
         self.name = pathlib.Path(os.path.abspath(self.path)).name
         self.manifest = manifest
         self.progress = progress
-        self.runs = [Run(**{k: r[k] for k in ("index", "name", "policy", "seed", "eps", "temperature", "ucb_c")})
+        self.runs = [Run(**{k: r[k] for k in ("index", "policy", "seed", "eps", "temperature", "ucb_c")})
                      for r in manifest["runs"]]
         self.n_agents = int(manifest["n_agents"])
         self.agent_names = list(manifest["agent_names"])
@@ -143,7 +141,7 @@ class Sweep:
     @property
     def table(self) -> dict[str, np.ndarray]:
         """The runs table as columns: index, name, policy, seed, eps, temperature, ucb_c."""
-        cols = {f.name: [getattr(r, f.name) for r in self.runs] for f in dataclasses.fields(Run)}
+        cols = {k: [getattr(r, k) for r in self.runs] for k in TABLE_COLUMNS}
         return {k: np.asarray(v) for k, v in cols.items()}
 
     def select(self, policy: str | Sequence[str] | None = None, seed=None, eps=None, temperature=None,
