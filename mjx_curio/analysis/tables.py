@@ -37,7 +37,7 @@ class Table:
     def to_csv(self) -> str:
         buf = io.StringIO()
         keys = list(self.values[0]) if self.values else []
-        w = csv.DictWriter(buf, fieldnames=keys)
+        w = csv.DictWriter(buf, fieldnames=keys, lineterminator="\n")  # the same file on every OS
         w.writeheader()
         w.writerows(self.values)
         return buf.getvalue()

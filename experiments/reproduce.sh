@@ -1,0 +1,49 @@
+#!/usr/bin/env bash
+# Remake every sweep and figure of docs/results.md from nothing.
+#
+#     bash experiments/reproduce.sh            # the scale of docs/results.md: 3 seeds, 15,000 steps
+#     SEEDS=8 STEPS=80000 bash experiments/reproduce.sh   # the paper's full scale (see below)
+#
+# Each sweep is checkpointed every 1,000 steps into runs/paper/<preset>; run the script again after
+# an interruption (a closed session, Ctrl-C, a scheduler's SIGTERM) and every sweep continues from
+# its newest checkpoint (resume=true) instead of starting over. Growing STEPS later continues the
+# same sweeps further. Then the metrics are copied into experiments/results/ and the page's
+# figures and tables are redrawn from them.
+#
+# Wall time on a 2-core AMD EPYC (lscpu "AMD EPYC", family 25 model 1), CPU only, one sweep at a
+# time, measured from the sweeps' own progress lines (run-steps/s = runs x steps per second):
+#   multi_agent    9 runs x 15,000 steps   WALL_MULTI
+#   single_agent   9 runs x 15,000 steps   WALL_SINGLE
+#   the page (snapshot + 8 figures + claims)  WALL_PAGE
+# The temperature and wall presets are not part of the default run (TEMPERATURES=1 and WALLS=1
+# add them): at this machine's rate they would take longer than the two sweeps above together.
+#
+# The paper's full scale (8 seeds, 80,000 steps, every preset) is a GPU job: install the CUDA
+# extra (pip install -e '.[cuda]') and run
+#     SEEDS=8 STEPS=80000 TEMPERATURES=1 WALLS=1 bash experiments/reproduce.sh
+# which is the presets' own default scale (python -m mjx_curio.sweep preset=<name>).
+set -euo pipefail
+cd "$(dirname "$0")/.."
+PY=${PYTHON:-.venv/bin/python}
+SEEDS=${SEEDS:-3}
+STEPS=${STEPS:-15000}
+
+sweep() {  # sweep PRESET [key=value ...]: start it, or continue it where it stopped
+    local preset=$1; shift
+    local resume=false
+    [[ -f runs/paper/$preset/manifest.json ]] && resume=true
+    "$PY" -m mjx_curio.sweep preset="$preset" seeds="$SEEDS" steps="$STEPS" checkpoint_every=1000 \
+        resume="$resume" "$@"
+}
+
+sweep multi_agent
+sweep single_agent
+if [[ ${TEMPERATURES:-0} == 1 ]]; then sweep boltzmann_temperatures; fi
+if [[ ${WALLS:-0} == 1 ]]; then
+    sweep single_agent_walls_different
+    sweep multi_agent_walls_different
+fi
+
+"$PY" experiments/results.py snapshot runs/paper
+"$PY" experiments/results.py page
+"$PY" experiments/results.py check

@@ -1,0 +1,353 @@
+"""The results page, docs/results.md: the paper's figures and claims from the preset sweeps.
+
+    python experiments/results.py snapshot [runs/paper]    # copy the sweeps' metrics into the repository
+    python experiments/results.py page                     # figures + tables of docs/results.md from them
+    python experiments/results.py check                    # does the page match the committed metrics?
+
+`snapshot` copies, for every sweep under the given directory that stands for one of the paper's
+presets (`analysis.assign_presets`), what the analysis reads of it (manifest.json, progress.json
+and metrics/, about 2 MB for 9 runs of 15,000 steps; not the checkpoints) into
+experiments/results/<preset>/, so the page can be rebuilt, and checked, from the repository
+alone. It never replaces a snapshot with a different sweep or with one that has fewer steps done.
+
+`page` loads those snapshots, draws the figures with the notebook's own functions
+(`mjx_curio.analysis.plot_*`) into docs/figures/results/, and rewrites the generated blocks of
+docs/results.md (between `<!-- generated: NAME -->` and `<!-- end: NAME -->`): the scale of the
+sweeps, the figures with their captions, and the claims table (`analysis.claims_table`); the rest
+of the page (what the verdicts mean, why a claim may fail here) is prose and stays as written.
+The claims' numbers also go to docs/results/claims.csv.
+
+`check` recomputes the scale and claims blocks from the snapshots and exits 1 if they differ from
+the page (the test suite does the same).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import json
+import pathlib
+import re
+import shutil
+import sys
+from typing import Callable
+
+import numpy as np
+
+ROOT = pathlib.Path(__file__).resolve().parents[1]
+SNAPSHOTS = ROOT / "experiments" / "results"
+PAGE = ROOT / "docs" / "results.md"
+FIGURES = ROOT / "docs" / "figures" / "results"
+CLAIMS_CSV = ROOT / "docs" / "results" / "claims.csv"
+SNAPSHOT_FILES = ("manifest.json", "progress.json")  # plus metrics/*.npy
+DPI = 80
+
+
+# ------------------------------------------------------------------------------------ snapshots
+
+
+def snapshot(src: str | pathlib.Path, dst: pathlib.Path = SNAPSHOTS) -> list[pathlib.Path]:
+    """Copy manifest, progress and metrics of every preset sweep in `src` to `dst/<preset>/`.
+    Refuses (ValueError, before copying anything) a snapshot that would replace one of another
+    sweep (different command) or one with more steps done."""
+    from mjx_curio import analysis as an
+
+    presets = an.assign_presets(an.load_sweeps(src))
+    if not presets:
+        raise ValueError(f"no sweep in {src} stands for a preset of mjx_curio/presets.toml")
+    plan = []
+    for name, s in presets.items():  # a sweep standing for several presets is copied as the first
+        if any(t is s for _, t in plan):
+            continue
+        target = dst / name
+        if (target / "manifest.json").is_file():
+            old = an.load(target)
+            if _command(old.manifest) != _command(s.manifest):
+                raise ValueError(f"{target} holds another sweep ({_command(old.manifest)!r}); "
+                                 f"{s.path} ran {_command(s.manifest)!r}. Move it away first.")
+            if old.steps_done > s.steps_done:
+                raise ValueError(f"{target} has {old.steps_done:,} steps done, {s.path} only {s.steps_done:,}")
+        plan.append((name, s))
+    written = []
+    for name, s in plan:
+        target = dst / name
+        tmp = dst / f".{name}.partial"
+        shutil.rmtree(tmp, ignore_errors=True)
+        (tmp / "metrics").mkdir(parents=True)
+        for f in SNAPSHOT_FILES:  # progress first: the metrics copied after it are final up to it
+            shutil.copy2(s.path / f, tmp / f)
+        done = _windows_done(tmp)
+        for f in sorted((s.path / "metrics").glob("*.npy")):
+            _copy_final_windows(f, tmp / "metrics" / f.name, done, f.name != "steps.npy")
+        shutil.rmtree(target, ignore_errors=True)
+        tmp.rename(target)
+        written.append(target)
+        print(f"{s.path} -> {target}: {s.n_runs} runs, {s.steps_done:,} of {int(s.manifest['config']['steps']):,} steps")
+    return written
+
+
+def _windows_done(sweep_dir: pathlib.Path) -> int:
+    progress = json.loads((sweep_dir / "progress.json").read_text())
+    return int(progress["windows_done"])
+
+
+def _copy_final_windows(src: pathlib.Path, dst: pathlib.Path, windows_done: int, blank: bool) -> None:
+    """Copy a metrics file with the windows after `windows_done` (not final while a sweep runs)
+    set to what a fresh sweep preallocates there (NaN, or 0 for counts), so a snapshot holds
+    only final values."""
+    arr = np.load(src)
+    if blank:
+        arr[:, windows_done:] = np.nan if np.issubdtype(arr.dtype, np.floating) else 0
+    np.save(dst, arr)
+
+
+def _command(manifest: dict) -> str:
+    """The sweep's command without the keys that may change between sessions of one sweep."""
+    return re.sub(r" (steps|resume|progress|compile_cache|host_devices|out)=\S+", "", manifest.get("command", ""))
+
+
+def load_presets(src: pathlib.Path = SNAPSHOTS) -> dict:
+    """{preset: Sweep} of the snapshots in `src`."""
+    from mjx_curio import analysis as an
+
+    return an.assign_presets(an.load_sweeps(src)) if any(src.glob("*/manifest.json")) else {}
+
+
+# ------------------------------------------------------------------------------- generated blocks
+
+
+def scale_block(presets: dict) -> str:
+    """The sweeps behind the page: what ran, how many seeds, how far."""
+    rows = ["| preset | agents | walls | policies (seeds each) | image | steps done / planned | snapshot |",
+            "|---|---|---|---|---|---|---|"]
+    for name, s in presets.items():
+        cfg = s.manifest["config"]
+        groups = ", ".join(f"{g.label} ({g.n})" for g in s.groups())
+        halted = s.progress.get("halted", {})
+        note = f"; halted runs: {len(halted)}" if halted else ""
+        rows.append(f"| `{name}` | {s.n_agents} | {cfg.get('walls')} | {groups} | {s.image} × {s.image} | "
+                    f"{s.steps_done:,} / {int(cfg['steps']):,}{note} | `experiments/results/{s.name}` |")
+    if len(rows) == 2:
+        return "No preset sweep has been snapshotted yet.\n"
+    missing = [p for p in _preset_names() if p not in presets]
+    tail = f"\nNot run yet: {', '.join(f'`{p}`' for p in missing)}.\n" if missing else "\n"
+    return "\n".join(rows) + "\n" + tail
+
+
+def claims_block(presets: dict) -> str:
+    from mjx_curio import analysis as an
+
+    return an.claims_table(presets).to_markdown()
+
+
+@dataclasses.dataclass(frozen=True)
+class Figure:
+    name: str
+    needs: tuple[str, ...]  # presets
+    caption: str  # {placeholders} filled from the sweeps (`_facts`)
+    draw: Callable  # (presets) -> matplotlib Figure
+
+
+def _policy_panels(preset: str, plot: Callable, height: float = 3.0, width: float = 8.0):
+    def draw(presets):
+        import matplotlib.pyplot as plt
+
+        s = presets[preset]
+        gs = s.groups()
+        fig, axes = plt.subplots(len(gs), 1, figsize=(width, height * len(gs)), squeeze=False)
+        for ax, g in zip(axes[:, 0], gs):
+            plot(s, ax, g)
+        fig.tight_layout()
+        return fig
+    return draw
+
+
+def _one(plot: Callable, size=(8.0, 3.6)):
+    def draw(presets):
+        import matplotlib.pyplot as plt
+
+        fig, ax = plt.subplots(figsize=size)
+        plot(presets, ax)
+        fig.tight_layout()
+        return fig
+    return draw
+
+
+def _interactions(presets):
+    import matplotlib.pyplot as plt
+
+    from mjx_curio import analysis as an
+
+    fig, axes = plt.subplots(1, 2, figsize=(11, 3.8))
+    an.plot_cumulative_interactions(presets["multi_agent"], axes[0], "object")
+    an.plot_cumulative_interactions(presets["multi_agent"], axes[1], "agent")
+    fig.tight_layout()
+    return fig
+
+
+def _single_vs_multi(presets):
+    import matplotlib.pyplot as plt
+
+    from mjx_curio import analysis as an
+
+    fig, axes = plt.subplots(2, 1, figsize=(8, 6.4))
+    an.plot_single_vs_multi(presets["single_agent"], presets["multi_agent"], axes[0])
+    an.plot_vae_single_vs_multi(presets["single_agent"], presets["multi_agent"], axes[1])
+    fig.tight_layout()
+    return fig
+
+
+def _figures() -> tuple[Figure, ...]:
+    from mjx_curio import analysis as an
+
+    curiosity = ("Curiosity reward over training, {who}, one panel per policy (ε-greedy ε = 0.2, Boltzmann T = 1.5, "
+                 "UCB c = 1). x: agent steps; y: the curiosity reward, the squared distance between the MDN-RNN's "
+                 "predicted and the encoder's actual next latent (eq. 3, unitless). Thin line: the reward at every "
+                 "20th step, mean over {seeds} seeds; thick line: its trailing moving average over 50 such points "
+                 "(1,000 steps), mean over seeds; band: 95 % confidence interval of that mean across seeds "
+                 "(Student t). Paper: {paper}, one run each.")
+    return (
+        Figure("multi_agent_curiosity", ("multi_agent",),
+               curiosity.replace("{who}", "two agents (green and purple)").replace("{paper}", "figs. 17, 18 and 20"),
+               _policy_panels("multi_agent", an.plot_curiosity)),
+        Figure("single_agent_curiosity", ("single_agent",),
+               curiosity.replace("{who}", "one agent").replace("{paper}", "fig. 8 (ε-greedy)"),
+               _policy_panels("single_agent", an.plot_curiosity)),
+        Figure("multi_agent_policies", ("multi_agent",),
+               "The three policies' curiosity on one axis, two agents (their mean). x: agent steps; y: curiosity "
+               "reward (squared latent distance, unitless), moving average over 1,000 steps, mean over {seeds} seeds "
+               "with 95 % confidence bands. Paper: fig. 11 (single agent, one run each).",
+               _one(lambda p, ax: an.plot_curiosity_groups(p["multi_agent"], ax))),
+        Figure("multi_agent_interactions", ("multi_agent",),
+               "Cumulative contacts per policy, two agents. Left: agent-object contact steps (both agents, all four "
+               "objects); right: steps with the two agents touching. x: agent steps; y: the running total as a "
+               "percentage of the largest final total of any run group (the number it stands for is in the panel "
+               "title); mean over {seeds} seeds with 95 % confidence bands. Paper: figs. 21 and 22 (one run per "
+               "policy, 80,000 steps).",
+               _interactions),
+        Figure("multi_agent_actions", ("multi_agent",),
+               "How often each agent chose each action over the whole run, one panel per policy. x: the seven "
+               "actions; y: number of agent steps the action was chosen, mean over {seeds} seeds, error bars 95 % "
+               "confidence intervals across seeds. Paper: fig. 10 (single agent).",
+               _policy_panels("multi_agent", an.plot_action_histogram, height=2.6)),
+        Figure("single_vs_multi", ("single_agent", "multi_agent"),
+               "One agent against two, UCB (the paper's comparison). Top: curiosity reward (squared latent distance, "
+               "unitless), moving average over 1,000 steps, of the single agent and of each of the two agents; "
+               "bottom: the VAE's loss per image (nats: summed squared pixel error plus KL; the two-agent loss sums "
+               "both views and is halved here). x: agent steps. Means over seeds with 95 % confidence bands. "
+               "Paper: figs. 23 and 24.",
+               _single_vs_multi),
+        Figure("multi_agent_observational", ("multi_agent",),
+               "Curiosity by what an agent did or saw in each 20-step window, all runs of the two-agent sweep and "
+               "both agents. x: the four kinds of window (the number of windows below each); y: the agent's mean "
+               "curiosity in such windows minus its own trailing 1,000-step moving average (squared latent distance, "
+               "unitless), mean over runs with 95 % confidence intervals. Paper: section 5 (videos only).",
+               _one(lambda p, ax: an.plot_observational(p["multi_agent"], ax), size=(8, 3.8))),
+        Figure("boltzmann_temperatures", ("boltzmann_temperatures",),
+               "Boltzmann temperatures T = 0.5 to 2.5, two agents: curiosity reward (squared latent distance, "
+               "unitless; mean of both agents), moving average over 1,000 steps, mean over {seeds} seeds with 95 % "
+               "confidence bands. x: agent steps. Paper: fig. 19.",
+               _one(lambda p, ax: an.plot_temperatures(p["boltzmann_temperatures"], ax))),
+    )
+
+
+def _seeds(presets: dict, needs) -> str:
+    ns = sorted({g.n for p in needs for g in presets[p].groups()})
+    return "/".join(map(str, ns))
+
+
+def figures_block(presets: dict, out: pathlib.Path | None = FIGURES) -> str:
+    """Markdown for every figure whose presets exist, drawing each into `out` (None: draw none)."""
+    parts = []
+    for f in _figures():
+        if not all(p in presets for p in f.needs):
+            continue
+        if out is not None:
+            import matplotlib
+
+            matplotlib.use("Agg")
+            import matplotlib.pyplot as plt
+
+            from mjx_curio import analysis as an
+
+            fig = f.draw(presets)
+            an.save_figure(fig, out, f.name, dpi=DPI)
+            plt.close(fig)
+        steps = ", ".join(f"{presets[p].steps_done:,} steps ({p})" for p in f.needs)
+        caption = f.caption.replace("{seeds}", _seeds(presets, f.needs))
+        parts.append(f"![{f.name}](figures/results/{f.name}.png)\n\n*{caption} Sweeps: {steps}.*\n")
+    return "\n".join(parts) if parts else "No figure yet: no preset sweep has been snapshotted.\n"
+
+
+def _preset_names() -> list[str]:
+    from mjx_curio.presets import load_presets as presets_toml
+
+    return list(presets_toml())
+
+
+# ------------------------------------------------------------------------------------ the page
+
+
+def blocks(page: str) -> dict[str, str]:
+    """{name: text} of the page's generated blocks."""
+    return {m.group(1): m.group(2) for m in _BLOCK.finditer(page)}
+
+
+_BLOCK = re.compile(r"<!-- generated: (\w+) -->\n(.*?)<!-- end: \1 -->", re.S)
+
+
+def fill(page: str, new: dict[str, str]) -> str:
+    """`page` with the blocks named in `new` replaced. KeyError if the page lacks one."""
+    missing = set(new) - set(blocks(page))
+    if missing:
+        raise KeyError(f"{PAGE} has no generated block named {', '.join(sorted(missing))}")
+    return _BLOCK.sub(lambda m: f"<!-- generated: {m.group(1)} -->\n{new.get(m.group(1), m.group(2))}"
+                                f"<!-- end: {m.group(1)} -->", page)
+
+
+def computed_blocks(presets: dict) -> dict[str, str]:
+    """The blocks that are pure functions of the snapshots' metrics (what `check` compares)."""
+    return {"scale": scale_block(presets), "claims": claims_block(presets)}
+
+
+def write_page(src: pathlib.Path = SNAPSHOTS) -> None:
+    from mjx_curio import analysis as an
+
+    presets = load_presets(src)
+    new = computed_blocks(presets)
+    new["figures"] = figures_block(presets)
+    PAGE.write_text(fill(PAGE.read_text(), new))
+    CLAIMS_CSV.parent.mkdir(parents=True, exist_ok=True)
+    CLAIMS_CSV.write_text(an.claims_table(presets).to_csv())
+    print(f"wrote {PAGE}, {CLAIMS_CSV} and {len(list(FIGURES.glob('*.png')))} figures in {FIGURES}")
+
+
+def check_page(src: pathlib.Path = SNAPSHOTS) -> list[str]:
+    """Names of the computed blocks where the page differs from the snapshots."""
+    have = blocks(PAGE.read_text())
+    want = computed_blocks(load_presets(src))
+    return [k for k, v in want.items() if have.get(k) != v]
+
+
+def main(argv: list[str]) -> int:
+    import mjx_curio  # noqa: F401  (the package's XLA flags, should anything start JAX)
+
+    cmd = argv[0] if argv else ""
+    if cmd == "snapshot" and len(argv) <= 2:
+        snapshot(argv[1] if len(argv) == 2 else ROOT / "runs" / "paper")
+    elif cmd == "page" and len(argv) == 1:
+        write_page()
+    elif cmd == "check" and len(argv) == 1:
+        stale = check_page()
+        if stale:
+            print(f"{PAGE}: the {', '.join(stale)} block(s) differ from experiments/results; "
+                  "run `python experiments/results.py page`")
+            return 1
+        print(f"{PAGE} matches experiments/results")
+    else:
+        print(__doc__.split("\n\n")[1], file=sys.stderr)
+        return 2
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main(sys.argv[1:]))

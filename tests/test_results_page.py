@@ -1,0 +1,131 @@
+"""The results page (docs/results.md, made by experiments/results.py): its tables are what the
+claims code computes from the committed metrics, its figures exist, and snapshots copy only
+final windows and never replace a sweep with another or with less."""
+
+import importlib.util
+import json
+import pathlib
+import shutil
+import sys
+
+import numpy as np
+import pytest
+
+from mjx_curio import analysis as an
+
+ROOT = pathlib.Path(__file__).resolve().parents[1]
+
+
+@pytest.fixture(scope="module")
+def results():
+    name = "mjx_curio_results_page"
+    spec = importlib.util.spec_from_file_location(name, ROOT / "experiments" / "results.py")
+    module = importlib.util.module_from_spec(spec)
+    sys.modules[name] = module  # dataclasses look their module up while the file executes
+    spec.loader.exec_module(module)
+    yield module
+    sys.modules.pop(name, None)
+
+
+# ---------------------------------------------------------------------- the committed page
+
+
+def test_the_page_is_what_the_committed_metrics_give(results):
+    # Regenerating from experiments/results/ gives the committed tables, number for number.
+    assert results.check_page() == [], "run `python experiments/results.py page` and commit"
+    presets = results.load_presets()
+    page = results.PAGE.read_text()
+    blocks = results.blocks(page)
+    assert set(blocks) == {"scale", "figures", "claims"}
+    assert blocks["figures"] == results.figures_block(presets, out=None)
+    if presets:
+        assert results.CLAIMS_CSV.read_text() == an.claims_table(presets).to_csv()
+    for link in results.re.findall(r"\]\((figures/results/[^)]+\.png)\)", page):
+        assert (results.PAGE.parent / link).is_file(), link
+
+
+def test_the_readme_links_the_page():
+    head = (ROOT / "README.md").read_text().split("\n## ")[0]
+    assert "docs/results.md" in head
+
+
+def test_blocks_are_replaced_and_nothing_else(results):
+    page = "intro\n<!-- generated: a -->\nold a\n<!-- end: a -->\nmiddle\n<!-- generated: b -->\nold b\n<!-- end: b -->\nend\n"
+    assert results.blocks(page) == {"a": "old a\n", "b": "old b\n"}
+    new = results.fill(page, {"a": "new a\n"})
+    assert new == page.replace("old a", "new a")
+    with pytest.raises(KeyError, match="c"):
+        results.fill(page, {"c": "x\n"})
+
+
+# ---------------------------------------------------------------------- snapshots of tiny sweeps
+
+
+def _copy_sweep(src: pathlib.Path, dst: pathlib.Path, windows_done: int | None = None) -> pathlib.Path:
+    """What the analysis reads of a sweep, optionally as if it had only `windows_done` windows."""
+    (dst / "metrics").mkdir(parents=True)
+    for f in ("manifest.json", "progress.json"):
+        shutil.copy2(src / f, dst / f)
+    for f in (src / "metrics").glob("*.npy"):
+        shutil.copy2(f, dst / "metrics" / f.name)
+    if windows_done is not None:
+        p = json.loads((dst / "progress.json").read_text())
+        p["windows_done"] = windows_done
+        (dst / "progress.json").write_text(json.dumps(p))
+    return dst
+
+
+def test_snapshot_copies_final_windows_and_refuses_to_lose_any(results, tiny_sweep, tmp_path):
+    src = tmp_path / "runs"
+    full = an.load(tiny_sweep)
+    half = full.n_windows // 2
+    partial = _copy_sweep(tiny_sweep, src / "multi_agent", windows_done=half)
+    dst = tmp_path / "snap"
+    (written,) = results.snapshot(src, dst)
+    assert written == dst / "multi_agent"
+    assert sorted(p.name for p in written.iterdir()) == ["manifest.json", "metrics", "progress.json"]
+    snap = an.load(written)
+    assert snap.n_windows == half
+    for name, arr in snap.metrics.items():
+        np.testing.assert_array_equal(arr, full.metrics[name][:, :half], err_msg=name)
+    raw = np.load(written / "metrics" / "curiosity.npy")
+    assert np.isnan(raw[:, half:]).all()  # not final in the source: blanked as a fresh sweep has them
+    assert (np.load(written / "metrics" / "action_counts.npy")[:, half:] == 0).all()
+
+    # The whole sweep replaces the partial snapshot; the partial one may not replace it back.
+    shutil.rmtree(partial)
+    _copy_sweep(tiny_sweep, src / "multi_agent")
+    results.snapshot(src, dst)
+    assert an.load(dst / "multi_agent").n_windows == full.n_windows
+    shutil.rmtree(src / "multi_agent")
+    _copy_sweep(tiny_sweep, src / "multi_agent", windows_done=half)
+    with pytest.raises(ValueError, match="steps done"):
+        results.snapshot(src, dst)
+    assert an.load(dst / "multi_agent").n_windows == full.n_windows
+
+    # Another sweep under the same preset's name is refused too.
+    other = json.loads((tiny_sweep / "manifest.json").read_text())
+    other["command"] = other["command"].replace("seeds=", "seeds=9 was_seeds=")
+    (dst / "multi_agent" / "manifest.json").write_text(json.dumps(other))
+    with pytest.raises(ValueError, match="holds another sweep"):
+        results.snapshot(src, dst)
+
+
+def test_page_blocks_on_the_tiny_sweeps(results, tiny_sweeps_dir, tmp_path):
+    dst = tmp_path / "snap"
+    results.snapshot(tiny_sweeps_dir, dst)
+    presets = results.load_presets(dst)
+    assert set(presets) == {"single_agent", "multi_agent"}
+    # The snapshot gives the claims of the sweeps it copied.
+    original = an.claims_table(tiny_sweeps_dir).values
+    copied = an.claims_table(presets).values
+    # Every number but claim 7's (the tiny two-agent sweep also stood for the temperatures preset, and
+    # a sweep is copied once, as the first preset it stands for); the keys name the sweeps.
+    numbers = lambda vs: [[x for x in v.values() if isinstance(x, float)] for v in vs if v["key"] != "7"]  # noqa: E731
+    assert numbers(copied) == numbers(original)
+    scale = results.scale_block(presets)
+    assert "| `multi_agent` | 2 | same |" in scale and "200 / 200" in scale and "`boltzmann_temperatures`" in scale
+    figures = results.figures_block(presets, out=tmp_path / "fig")
+    drawn = sorted(p.stem for p in (tmp_path / "fig").glob("*.png"))
+    assert drawn == sorted(f.name for f in results._figures() if set(f.needs) <= set(presets))
+    assert len(drawn) == 7 and figures.count("![") == 7
