@@ -156,6 +156,7 @@ def _policy_panels(preset: str, plot: Callable, height: float = 3.0, width: floa
         fig, axes = plt.subplots(len(gs), 1, figsize=(width, height * len(gs)), squeeze=False)
         for ax, g in zip(axes[:, 0], gs):
             plot(s, ax, g)
+            ax.yaxis.label.set_fontsize(8)  # stacked panels: the long labels must not run into each other
         fig.tight_layout()
         return fig
     return draw
