@@ -332,9 +332,15 @@ def check_page(src: pathlib.Path = SNAPSHOTS) -> list[str]:
 def main(argv: list[str]) -> int:
     import mjx_curio  # noqa: F401  (the package's XLA flags, should anything start JAX)
 
+    from mjx_curio.analysis import SweepError
+
     cmd = argv[0] if argv else ""
     if cmd == "snapshot" and len(argv) <= 2:
-        snapshot(argv[1] if len(argv) == 2 else ROOT / "runs" / "paper")
+        try:
+            snapshot(argv[1] if len(argv) == 2 else ROOT / "runs" / "paper")
+        except (SweepError, ValueError) as err:
+            print(f"results.py snapshot: {err}", file=sys.stderr)
+            return 2
     elif cmd == "page" and len(argv) == 1:
         write_page()
     elif cmd == "check" and len(argv) == 1:
