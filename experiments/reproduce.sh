@@ -12,9 +12,9 @@
 #
 # Wall time on a 2-core AMD EPYC (lscpu "AMD EPYC", family 25 model 1), CPU only, one sweep at a
 # time, measured from the sweeps' own progress lines (run-steps/s = runs x steps per second):
-#   multi_agent    9 runs x 15,000 steps   WALL_MULTI
-#   single_agent   9 runs x 15,000 steps   WALL_SINGLE
-#   the page (snapshot + 8 figures + claims)  WALL_PAGE
+#   multi_agent    9 runs x 15,000 steps   2 h 25 min (15.5 run-steps/s: steps 500-15,000 ran in 2 h 21 min)
+#   single_agent   9 runs x 15,000 steps   not yet measured (running)
+#   the page (snapshot, figures, claims)     about 5 s
 # The temperature and wall presets are not part of the default run (TEMPERATURES=1 and WALLS=1
 # add them): at this machine's rate they would take longer than the two sweeps above together.
 #
