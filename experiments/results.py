@@ -129,7 +129,7 @@ def scale_block(presets: dict) -> str:
     if len(rows) == 2:
         return "No preset sweep has been snapshotted yet.\n"
     missing = [p for p in _preset_names() if p not in presets]
-    tail = f"\nNot run yet: {', '.join(f'`{p}`' for p in missing)}.\n" if missing else "\n"
+    tail = f"\nNo snapshot yet of: {', '.join(f'`{p}`' for p in missing)}.\n" if missing else "\n"
     return "\n".join(rows) + "\n" + tail
 
 
