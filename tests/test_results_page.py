@@ -145,3 +145,13 @@ def test_page_blocks_on_the_tiny_sweeps(results, tiny_sweeps_dir, tmp_path):
     drawn = sorted(p.stem for p in (tmp_path / "fig").glob("*.png"))
     assert drawn == sorted(f.name for f in results._figures() if set(f.needs) <= set(presets))
     assert len(drawn) == 7 and figures.count("![") == 7
+
+
+def test_bad_command_lines_are_messages_not_tracebacks(results, tmp_path, capsys):
+    assert results.main(["snapshot", str(tmp_path / "nowhere")]) == 2
+    assert "results.py snapshot:" in capsys.readouterr().err
+    assert results.main(["snapshot", str(tmp_path)]) == 2  # a directory with no sweep in it
+    assert "no manifest.json" in capsys.readouterr().err
+    assert results.main(["draw"]) == 2
+    assert "results.py page" in capsys.readouterr().err
+    assert not any(tmp_path.iterdir())  # nothing written
