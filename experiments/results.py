@@ -213,6 +213,18 @@ def _figures() -> tuple[Figure, ...]:
         Figure("single_agent_curiosity", ("single_agent",),
                curiosity.replace("{who}", "one agent").replace("{paper}", "fig. 8 (ε-greedy)"),
                _policy_panels("single_agent", an.plot_curiosity)),
+        Figure("single_agent_objects", ("single_agent",),
+               "How often the single agent touches each of the four objects over training, one panel per policy. "
+               "x: agent steps; y: the share of agent steps in contact with the object, averaged over bins of 500 "
+               "steps; mean over {seeds} seeds with 95 % confidence bands. The sphere and the cylinder (once toppled) "
+               "roll when pushed; the pyramid and the disc do not move. Paper: fig. 9 (ε-greedy, one run).",
+               _policy_panels("single_agent", lambda s, ax, g: an.plot_interaction_frequency(s, ax, g, every=500),
+                              height=2.6)),
+        Figure("single_agent_actions", ("single_agent",),
+               "How often the single agent chose each action over the whole run, one panel per policy. x: the seven "
+               "actions; y: number of agent steps the action was chosen, mean over {seeds} seeds, error bars 95 % "
+               "confidence intervals across seeds. Paper: figs. 10 and 12 (ε-greedy, one run each).",
+               _policy_panels("single_agent", an.plot_action_histogram, height=2.6)),
         Figure("multi_agent_policies", ("multi_agent",),
                "The three policies' curiosity on one axis, two agents (their mean). x: agent steps; y: curiosity "
                "reward (squared latent distance, unitless), moving average over 1,000 steps, mean over {seeds} seeds "

@@ -144,7 +144,7 @@ def test_page_blocks_on_the_tiny_sweeps(results, tiny_sweeps_dir, tmp_path):
     figures = results.figures_block(presets, out=tmp_path / "fig")
     drawn = sorted(p.stem for p in (tmp_path / "fig").glob("*.png"))
     assert drawn == sorted(f.name for f in results._figures() if set(f.needs) <= set(presets))
-    assert len(drawn) == 7 and figures.count("![") == 7
+    assert len(drawn) == 9 and figures.count("![") == 9
 
 
 def test_bad_command_lines_are_messages_not_tracebacks(results, tmp_path, capsys):

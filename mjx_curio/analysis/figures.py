@@ -254,7 +254,7 @@ def plot_action_histogram(sweep: Sweep, ax, group: Any = None):
     ax.set_xticks(x)
     ax.set_xticklabels([s.replace("_", "\n") for s in sweep.actions], fontsize=8)
     return _finish(ax, f"Actions chosen over {sweep.steps_done:,} steps: {g.label}, {g.seeds_text}", "action",
-                   "times chosen (agent steps, mean over seeds)", legend=n_a > 1)
+                   "times chosen\n(agent steps, mean over seeds)", legend=n_a > 1)
 
 
 def plot_view_fractions(sweep: Sweep, ax, group: Any = None, agent: int = 0, every: int = 100):
