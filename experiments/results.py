@@ -190,9 +190,11 @@ def _single_vs_multi(presets):
 
     from mjx_curio import analysis as an
 
-    fig, axes = plt.subplots(2, 1, figsize=(8, 6.4))
+    fig, axes = plt.subplots(2, 1, figsize=(8, 7.6))
     an.plot_single_vs_multi(presets["single_agent"], presets["multi_agent"], axes[0])
     an.plot_vae_single_vs_multi(presets["single_agent"], presets["multi_agent"], axes[1])
+    for ax in axes:
+        ax.yaxis.label.set_fontsize(8)  # stacked panels: the long labels must not run into each other
     fig.tight_layout()
     return fig
 
@@ -216,8 +218,8 @@ def _figures() -> tuple[Figure, ...]:
         Figure("single_agent_objects", ("single_agent",),
                "How often the single agent touches each of the four objects over training, one panel per policy. "
                "x: agent steps; y: the share of agent steps in contact with the object, averaged over bins of 500 "
-               "steps; mean over {seeds} seeds with 95 % confidence bands. The sphere and the cylinder (once toppled) "
-               "roll when pushed; the pyramid and the disc do not move. Paper: fig. 9 (ε-greedy, one run).",
+               "steps; mean over {seeds} seeds with 95 % confidence bands. Pushed, the sphere and the cylinder (once "
+               "toppled) roll; the pyramid and the disc can only slide. Paper: fig. 9 (ε-greedy, one run).",
                _policy_panels("single_agent", lambda s, ax, g: an.plot_interaction_frequency(s, ax, g, every=500),
                               height=2.6)),
         Figure("single_agent_actions", ("single_agent",),
