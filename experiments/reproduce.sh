@@ -1,8 +1,10 @@
 #!/usr/bin/env bash
 # Remake every sweep and figure of docs/results.md from nothing.
 #
-#     bash experiments/reproduce.sh            # the scale of docs/results.md: 3 seeds, 15,000 steps
-#     SEEDS=8 STEPS=80000 bash experiments/reproduce.sh   # the paper's full scale (see below)
+#     bash experiments/reproduce.sh      # the scale of docs/results.md: 3 seeds, 15,000 steps a run
+#                                        # (the temperature sweep 4,000)
+#     SEEDS=8 STEPS=80000 TEMPERATURE_STEPS=80000 WALLS=1 bash experiments/reproduce.sh
+#                                        # the paper's full scale (see below)
 #
 # Each sweep is checkpointed every 1,000 steps into runs/paper/<preset>; run the script again after
 # an interruption (a closed session, Ctrl-C, a scheduler's SIGTERM) and every sweep continues from
@@ -13,35 +15,38 @@
 # Wall time on a 2-core AMD EPYC (lscpu "AMD EPYC", family 25 model 1), CPU only, one sweep at a
 # time, measured from the sweeps' own progress lines (run-steps/s = runs x steps per second):
 #   multi_agent    9 runs x 15,000 steps   2 h 25 min (15.5 run-steps/s: steps 500-15,000 ran in 2 h 21 min)
-#   single_agent   9 runs x 15,000 steps   not yet measured (running)
+#   single_agent   9 runs x 15,000 steps   1 h 14 min (30.7 run-steps/s: steps 1,000-15,000 ran in 1 h 9 min)
+#   boltzmann_temperatures  15 runs x 4,000 steps   54 min (18.6 run-steps/s)
 #   the page (snapshot, figures, claims)     about 5 s
-# The temperature and wall presets are not part of the default run (TEMPERATURES=1 and WALLS=1
-# add them): at this machine's rate they would take longer than the two sweeps above together.
+# The temperature sweep runs 4,000 steps (TEMPERATURE_STEPS) so that it fits beside the others; the
+# wall presets are not part of the default run (WALLS=1 adds them): at this machine's rate the two
+# would take about as long as the two 15,000-step sweeps above together.
 #
 # The paper's full scale (8 seeds, 80,000 steps, every preset) is a GPU job: install the CUDA
 # extra (pip install -e '.[cuda]') and run
-#     SEEDS=8 STEPS=80000 TEMPERATURES=1 WALLS=1 bash experiments/reproduce.sh
+#     SEEDS=8 STEPS=80000 TEMPERATURE_STEPS=80000 WALLS=1 bash experiments/reproduce.sh
 # which is the presets' own default scale (python -m mjx_curio.sweep preset=<name>).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 PY=${PYTHON:-.venv/bin/python}
 SEEDS=${SEEDS:-3}
 STEPS=${STEPS:-15000}
+TEMPERATURE_STEPS=${TEMPERATURE_STEPS:-4000}
 
-sweep() {  # sweep PRESET [key=value ...]: start it, or continue it where it stopped
-    local preset=$1; shift
+sweep() {  # sweep PRESET STEPS: start it, or continue it where it stopped (or grow it to STEPS)
+    local preset=$1 steps=$2
     local resume=false
     [[ -f runs/paper/$preset/manifest.json ]] && resume=true
-    "$PY" -m mjx_curio.sweep preset="$preset" seeds="$SEEDS" steps="$STEPS" checkpoint_every=1000 \
-        resume="$resume" "$@"
+    "$PY" -m mjx_curio.sweep preset="$preset" seeds="$SEEDS" steps="$steps" checkpoint_every=1000 \
+        resume="$resume"
 }
 
-sweep multi_agent
-sweep single_agent
-if [[ ${TEMPERATURES:-0} == 1 ]]; then sweep boltzmann_temperatures; fi
+sweep multi_agent "$STEPS"
+sweep single_agent "$STEPS"
+sweep boltzmann_temperatures "$TEMPERATURE_STEPS"
 if [[ ${WALLS:-0} == 1 ]]; then
-    sweep single_agent_walls_different
-    sweep multi_agent_walls_different
+    sweep single_agent_walls_different "$STEPS"
+    sweep multi_agent_walls_different "$STEPS"
 fi
 
 "$PY" experiments/results.py snapshot runs/paper

@@ -261,7 +261,14 @@ def _figures() -> tuple[Figure, ...]:
                "Boltzmann temperatures T = 0.5 to 2.5, two agents: curiosity reward (squared latent distance, "
                "unitless; mean of both agents), moving average over 1,000 steps, mean over {seeds} seeds with 95 % "
                "confidence bands. x: agent steps. Paper: fig. 19.",
-               _one(lambda p, ax: an.plot_temperatures(p["boltzmann_temperatures"], ax))),
+               _one(lambda p, ax: an.plot_temperatures(p["boltzmann_temperatures"], ax), size=(9.5, 3.8))),
+        Figure("boltzmann_temperatures_actions", ("boltzmann_temperatures",),
+               "How often each agent chose each action over the whole run under the Boltzmann policy, one panel "
+               "per temperature T (0.5 at the top to 2.5 at the bottom), two agents. x: the seven actions; y: number "
+               "of agent steps the action was chosen, mean over {seeds} seeds, error bars 95 % confidence intervals "
+               "across seeds. A uniform choice would give each action 1/7 of the steps. Paper: fig. 19 shows only "
+               "curiosity.",
+               _policy_panels("boltzmann_temperatures", an.plot_action_histogram, height=2.4)),
     )
 
 
