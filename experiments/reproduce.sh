@@ -33,6 +33,16 @@ PY=${PYTHON:-.venv/bin/python}
 SEEDS=${SEEDS:-3}
 STEPS=${STEPS:-15000}
 TEMPERATURE_STEPS=${TEMPERATURE_STEPS:-4000}
+WALLS=${WALLS:-0}
+# Bad settings stop here, before any sweep starts (a sweep advances in chunks of 100 steps).
+for knob in SEEDS STEPS TEMPERATURE_STEPS; do
+    value=${!knob}
+    if ! [[ $value =~ ^[1-9][0-9]*$ ]] || { [[ $knob != SEEDS ]] && (( value % 100 )); }; then
+        echo "reproduce.sh: $knob=$value: want a positive whole number$([[ $knob != SEEDS ]] && echo ', a multiple of 100')" >&2
+        exit 2
+    fi
+done
+if [[ $WALLS != 0 && $WALLS != 1 ]]; then echo "reproduce.sh: WALLS=$WALLS: want 0 or 1" >&2; exit 2; fi
 
 sweep() {  # sweep PRESET STEPS: start it, or continue it where it stopped (or grow it to STEPS)
     local preset=$1 steps=$2
@@ -46,7 +56,7 @@ sweep multi_agent "$STEPS"
 sweep single_agent "$STEPS"
 sweep boltzmann_temperatures "$TEMPERATURE_STEPS"
 sweep single_agent_walls_different "$STEPS"
-if [[ ${WALLS:-0} == 1 ]]; then sweep multi_agent_walls_different "$STEPS"; fi
+if [[ $WALLS == 1 ]]; then sweep multi_agent_walls_different "$STEPS"; fi
 
 "$PY" experiments/results.py snapshot runs/paper
 "$PY" experiments/results.py page

@@ -225,7 +225,7 @@ def _figures() -> tuple[Figure, ...]:
         Figure("single_agent_actions", ("single_agent",),
                "How often the single agent chose each action over the whole run, one panel per policy. x: the seven "
                "actions; y: number of agent steps the action was chosen, mean over {seeds} seeds, error bars 95 % "
-               "confidence intervals across seeds. Paper: figs. 10 and 12 (ε-greedy, one run each).",
+               "confidence intervals across seeds. Paper: fig. 10 (ε-greedy, one run).",
                _policy_panels("single_agent", an.plot_action_histogram, height=2.6)),
         Figure("multi_agent_policies", ("multi_agent",),
                "The three policies' curiosity on one axis, two agents (their mean). x: agent steps; y: curiosity "

@@ -145,6 +145,10 @@ def test_page_blocks_on_the_tiny_sweeps(results, tiny_sweeps_dir, tmp_path):
     drawn = sorted(p.stem for p in (tmp_path / "fig").glob("*.png"))
     assert drawn == sorted(f.name for f in results._figures() if set(f.needs) <= set(presets))
     assert len(drawn) == 9 and figures.count("![") == 9
+    # The temperature figures too, with the tiny two-agent sweep (it has a Boltzmann group) standing in.
+    presets["boltzmann_temperatures"] = presets["multi_agent"]
+    results.figures_block(presets, out=tmp_path / "all")
+    assert len(list((tmp_path / "all").glob("*.png"))) == 11
 
 
 def test_bad_command_lines_are_messages_not_tracebacks(results, tmp_path, capsys):
@@ -155,3 +159,21 @@ def test_bad_command_lines_are_messages_not_tracebacks(results, tmp_path, capsys
     assert results.main(["draw"]) == 2
     assert "results.py page" in capsys.readouterr().err
     assert not any(tmp_path.iterdir())  # nothing written
+
+
+@pytest.mark.parametrize("setting, message", [
+    ("STEPS=150", "STEPS=150: want a positive whole number, a multiple of 100"),
+    ("TEMPERATURE_STEPS=abc", "TEMPERATURE_STEPS=abc: want a positive whole number"),
+    ("SEEDS=0", "SEEDS=0: want a positive whole number"),
+    ("WALLS=2", "WALLS=2: want 0 or 1"),
+])
+def test_reproduce_refuses_bad_settings_before_any_sweep(setting, message):
+    import os
+    import subprocess
+
+    key, value = setting.split("=")
+    # PYTHON=false: had a sweep been started, it would fail with another message and exit 1
+    env = {**os.environ, key: value, "PYTHON": "false"}
+    done = subprocess.run(["bash", str(ROOT / "experiments" / "reproduce.sh")], env=env, capture_output=True,
+                          text=True, timeout=60)
+    assert done.returncode == 2 and message in done.stderr
