@@ -203,6 +203,26 @@ def test_dip_and_rise_found_when_planted_not_in_noise():
     assert r.verdict.startswith("does not hold"), r.verdict
 
 
+def test_two_agents_higher_compares_the_same_steps_when_one_sweep_is_longer():
+    # Curiosity and loss drift upward with training alike for one and two agents; the two-agent
+    # sweep ran 20,000 steps, the one-agent sweep 15,000. Only the common steps are comparable.
+    rng = np.random.default_rng(5)
+    single = fake_sweep("single_agent", 1, POLICIES, 750, seeds=4)
+    multi = fake_sweep("multi_agent", 2, POLICIES, 1000, seeds=4)
+    for s in (single, multi):
+        drift = s.steps / 10_000
+        s.metrics["curiosity"][:] = drift[None, :, None] + 0.01 * rng.normal(size=s.metrics["curiosity"].shape)
+        s.metrics["vae_loss"][:] = s.n_agents * 100 * drift[None, :] + rng.normal(size=s.metrics["vae_loss"].shape)
+    r = cl.claim_two_agents_higher({"single_agent": single, "multi_agent": multi})
+    assert "steps 7,500-15,000" in r.statistic
+    assert r.values["curiosity multi"] == pytest.approx(r.values["curiosity single"], abs=0.01)
+    assert r.verdict.startswith("does not hold"), r.verdict
+    multi.metrics["curiosity"][:] += 0.2  # a real two-agent excess, in loss too
+    multi.metrics["vae_loss"][:] += 2 * 20
+    r = cl.claim_two_agents_higher({"single_agent": single, "multi_agent": multi})
+    assert r.verdict.startswith("holds"), r.verdict
+
+
 def test_running_action_baseline_recovers_per_action_means():
     rng = np.random.default_rng(3)
     counts = rng.multinomial(20, np.full(7, 1 / 7), size=(2, 300, 2)).astype(np.int32)  # [R, W, A, actions]

@@ -338,7 +338,8 @@ def claim_two_agents_higher(presets: Mapping[str, Sweep]) -> ClaimResult:
     """Claim 3: two agents have higher curiosity and a higher VAE loss than one (figs. 23, 24).
 
     Measured on the UCB runs (the paper's choice) of single_agent and multi_agent, per run, as
-    means over the second half of the run (after the initial fall): curiosity (averaged over the
+    means over the second half of the steps both sweeps have run (after the initial fall; the same
+    steps on both sides when one sweep is longer): curiosity (averaged over the
     agents) and the VAE loss per image (`stats.per_agent_vae_loss`: the two-agent loss of eq. 5
     sums both views, so it is halved; the summed loss is ~2x a single agent's by construction).
     Welch t multi - single for each. Verdict: holds if both differences are positive with p < 0.05.
@@ -354,9 +355,13 @@ def claim_two_agents_higher(presets: Mapping[str, Sweep]) -> ClaimResult:
     if gs is None or gm is None:
         return ClaimResult(key, claim, evidence, "n/a", "not testable: " + " and ".join(
             f"{s.name} has no UCB runs" for s, g in ((single, gs), (multi, gm)) if g is None))
-    cur = {w: _late_half(s, _nanmean(s.metrics["curiosity"][g.indices].astype(float), axis=2))
+    # The same steps on both sides: curiosity and loss drift over training, so a longer sweep's
+    # later half would not be comparable with a shorter one's.
+    common = min(single.steps_done, multi.steps_done)
+    lo, hi = common // 2, common
+    cur = {w: _block_mean(s, _nanmean(s.metrics["curiosity"][g.indices].astype(float), axis=2), lo, hi)
            for w, s, g in (("single", single, gs), ("multi", multi, gm))}
-    vae = {w: _late_half(s, per_agent_vae_loss(s)[g.indices].astype(float))
+    vae = {w: _block_mean(s, per_agent_vae_loss(s)[g.indices].astype(float), lo, hi)
            for w, s, g in (("single", single, gs), ("multi", multi, gm))}
     values, parts, fails = {}, [], []
     for what, d in (("curiosity", cur), ("VAE loss per image", vae)):
@@ -373,7 +378,8 @@ def claim_two_agents_higher(presets: Mapping[str, Sweep]) -> ClaimResult:
         return ClaimResult(key, claim, evidence, "; ".join(parts),
                            f"not testable: {single.name} ({single.image} px) and {multi.name} ({multi.image} px) "
                            "differ in image size", values)
-    stat = f"mean over the second half of each run, {single.name} vs {multi.name}: " + "; ".join(parts)
+    stat = (f"mean over steps {lo:,}-{hi:,} of each run (the second half of the steps both sweeps ran), "
+            f"{single.name} vs {multi.name}: " + "; ".join(parts))
     return ClaimResult(key, claim, evidence, stat, _decide(gaps, fails, "both Welch tests p < 0.05, multi > single"),
                        values)
 
@@ -826,10 +832,6 @@ def _block_mean(sweep: Sweep, x: np.ndarray, start: int, end: int) -> np.ndarray
     if hi <= lo:
         return np.full(x.shape[0], np.nan)
     return _nanmean(x[:, lo:hi], axis=1)
-
-
-def _late_half(sweep: Sweep, x: np.ndarray) -> np.ndarray:
-    return _nanmean(x[:, x.shape[1] // 2:], axis=1)
 
 
 def _paper_group(sweep: Sweep, policy: str) -> Group | None:
