@@ -1,42 +1,48 @@
 #!/usr/bin/env bash
 # Remake every sweep and figure of docs/results.md from nothing.
 #
-#     bash experiments/reproduce.sh      # the scale of docs/results.md: 3 seeds, 15,000 steps a run
-#                                        # (the temperature sweep 4,000)
-#     SEEDS=8 STEPS=80000 TEMPERATURE_STEPS=80000 WALLS=1 bash experiments/reproduce.sh
+#     bash experiments/reproduce.sh      # the scale of docs/results.md: 3 seeds; 20,000 steps a run
+#                                        # with two agents, 15,000 with one, 4,000 for temperatures
+#     SEEDS=8 STEPS=80000 WALLS=1 bash experiments/reproduce.sh
 #                                        # the paper's full scale (see below)
 #
-# Each sweep is checkpointed every 1,000 steps into runs/paper/<preset>; run the script again after
-# an interruption (a closed session, Ctrl-C, a scheduler's SIGTERM) and every sweep continues from
-# its newest checkpoint (resume=true) instead of starting over. Growing STEPS later continues the
-# same sweeps further. Then the metrics are copied into experiments/results/ and the page's
-# figures and tables are redrawn from them.
+# Run lengths: STEPS, when given, sets every sweep's; MULTI_STEPS (multi_agent), SINGLE_STEPS
+# (single_agent), TEMPERATURE_STEPS (boltzmann_temperatures) and WALL_STEPS (the wall presets) set
+# one sweep's and win over STEPS. Each sweep is checkpointed every 1,000 steps into
+# runs/paper/<preset>; run the script again after an interruption (a closed session, Ctrl-C, a
+# scheduler's SIGTERM) and every sweep continues from its newest checkpoint (resume=true) instead of
+# starting over. Asking for more steps later continues the same sweeps further. Then the metrics are
+# copied into experiments/results/ and the page's figures and tables are redrawn from them.
 #
 # Wall time on a 2-core AMD EPYC (lscpu "AMD EPYC", family 25 model 1), CPU only, one sweep at a
 # time, measured from the sweeps' own progress lines (run-steps/s = runs x steps per second):
-#   multi_agent    9 runs x 15,000 steps   2 h 25 min (15.5 run-steps/s: steps 500-15,000 ran in 2 h 21 min)
+#   multi_agent    9 runs x 20,000 steps   3 h 5 min (steps 500-15,000 ran in 2 h 21 min at 15.5 run-steps/s, steps 15,000-20,000 in 40 min at 18.7)
 #   single_agent   9 runs x 15,000 steps   1 h 14 min (30.7 run-steps/s: steps 1,000-15,000 ran in 1 h 9 min)
 #   boltzmann_temperatures  15 runs x 4,000 steps   54 min (18.6 run-steps/s)
 #   single_agent_walls_different  3 runs x 15,000 steps   30 min (25.9 run-steps/s)
 #   the page (snapshot, figures, claims)     about 5 s
-# The temperature sweep runs 4,000 steps (TEMPERATURE_STEPS) so that it fits beside the others; the
-# two-agent wall preset is not part of the default run (WALLS=1 adds it; about as long as
-# multi_agent), and no claim on the page uses it.
+# The temperature sweep runs 4,000 steps so that it fits beside the others; the two-agent wall
+# preset is not part of the default run (WALLS=1 adds it; about as long as multi_agent), and no
+# claim on the page uses it.
 #
 # The paper's full scale (8 seeds, 80,000 steps, every preset) is a GPU job: install the CUDA
 # extra (pip install -e '.[cuda]') and run
-#     SEEDS=8 STEPS=80000 TEMPERATURE_STEPS=80000 WALLS=1 bash experiments/reproduce.sh
+#     SEEDS=8 STEPS=80000 WALLS=1 bash experiments/reproduce.sh
 # which is the presets' own default scale (python -m mjx_curio.sweep preset=<name>).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 PY=${PYTHON:-.venv/bin/python}
 SEEDS=${SEEDS:-3}
-STEPS=${STEPS:-15000}
-TEMPERATURE_STEPS=${TEMPERATURE_STEPS:-4000}
+STEPS=${STEPS:-}
+MULTI_STEPS=${MULTI_STEPS:-${STEPS:-20000}}
+SINGLE_STEPS=${SINGLE_STEPS:-${STEPS:-15000}}
+TEMPERATURE_STEPS=${TEMPERATURE_STEPS:-${STEPS:-4000}}
+WALL_STEPS=${WALL_STEPS:-${STEPS:-15000}}
 WALLS=${WALLS:-0}
 # Bad settings stop here, before any sweep starts (a sweep advances in chunks of 100 steps).
-for knob in SEEDS STEPS TEMPERATURE_STEPS; do
+for knob in SEEDS STEPS MULTI_STEPS SINGLE_STEPS TEMPERATURE_STEPS WALL_STEPS; do
     value=${!knob}
+    [[ $knob == STEPS && -z $value ]] && continue  # STEPS unset: each sweep's own default
     if ! [[ $value =~ ^[1-9][0-9]*$ ]] || { [[ $knob != SEEDS ]] && (( value % 100 )); }; then
         echo "reproduce.sh: $knob=$value: want a positive whole number$([[ $knob != SEEDS ]] && echo ', a multiple of 100')" >&2
         exit 2
@@ -52,11 +58,11 @@ sweep() {  # sweep PRESET STEPS: start it, or continue it where it stopped (or g
         resume="$resume"
 }
 
-sweep multi_agent "$STEPS"
-sweep single_agent "$STEPS"
+sweep multi_agent "$MULTI_STEPS"
+sweep single_agent "$SINGLE_STEPS"
 sweep boltzmann_temperatures "$TEMPERATURE_STEPS"
-sweep single_agent_walls_different "$STEPS"
-if [[ $WALLS == 1 ]]; then sweep multi_agent_walls_different "$STEPS"; fi
+sweep single_agent_walls_different "$WALL_STEPS"
+if [[ $WALLS == 1 ]]; then sweep multi_agent_walls_different "$WALL_STEPS"; fi
 
 "$PY" experiments/results.py snapshot runs/paper
 "$PY" experiments/results.py page

@@ -164,6 +164,7 @@ def test_bad_command_lines_are_messages_not_tracebacks(results, tmp_path, capsys
 @pytest.mark.parametrize("setting, message", [
     ("STEPS=150", "STEPS=150: want a positive whole number, a multiple of 100"),
     ("TEMPERATURE_STEPS=abc", "TEMPERATURE_STEPS=abc: want a positive whole number"),
+    ("MULTI_STEPS=7", "MULTI_STEPS=7: want a positive whole number, a multiple of 100"),
     ("SEEDS=0", "SEEDS=0: want a positive whole number"),
     ("WALLS=2", "WALLS=2: want 0 or 1"),
 ])
