@@ -178,3 +178,26 @@ def test_reproduce_refuses_bad_settings_before_any_sweep(setting, message):
     done = subprocess.run(["bash", str(ROOT / "experiments" / "reproduce.sh")], env=env, capture_output=True,
                           text=True, timeout=60)
     assert done.returncode == 2 and message in done.stderr
+
+
+@pytest.mark.parametrize("settings, want", [
+    ({}, {"multi_agent": 20000, "single_agent": 40000, "boltzmann_temperatures": 4000,
+          "single_agent_walls_different": 15000}),
+    ({"STEPS": "80000", "SINGLE_STEPS": "30000", "WALLS": "1"},
+     {"multi_agent": 80000, "single_agent": 30000, "boltzmann_temperatures": 80000,
+      "single_agent_walls_different": 80000, "multi_agent_walls_different": 80000}),
+])
+def test_reproduce_run_lengths_per_sweep_and_steps_for_all(settings, want):
+    import os
+    import re
+    import subprocess
+
+    # PYTHON=echo prints each command instead of running it: nothing is swept or written.
+    env = {k: v for k, v in os.environ.items()
+           if k not in ("SEEDS", "STEPS", "MULTI_STEPS", "SINGLE_STEPS", "TEMPERATURE_STEPS", "WALL_STEPS", "WALLS")}
+    env.update(settings, PYTHON="echo")
+    done = subprocess.run(["bash", str(ROOT / "experiments" / "reproduce.sh")], env=env, capture_output=True,
+                          text=True, timeout=60)
+    assert done.returncode == 0, done.stderr
+    got = {m[1]: int(m[2]) for m in re.finditer(r"preset=(\S+) seeds=3 steps=(\d+)", done.stdout)}
+    assert got == want
