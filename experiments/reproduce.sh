@@ -1,8 +1,8 @@
 #!/usr/bin/env bash
 # Remake every sweep and figure of docs/results.md from nothing.
 #
-#     bash experiments/reproduce.sh      # the scale of docs/results.md: 3 seeds; 20,000 steps a run
-#                                        # with two agents, 40,000 with one, 4,000 for temperatures,
+#     bash experiments/reproduce.sh      # the scale of docs/results.md: 3 seeds; 40,000 steps a run
+#                                        # with one or two agents, 4,000 for temperatures,
 #                                        # 15,000 for the wall variants
 #     SEEDS=8 STEPS=80000 WALLS=1 bash experiments/reproduce.sh
 #                                        # the paper's full scale (see below)
@@ -17,7 +17,7 @@
 #
 # Wall time on a 2-core AMD EPYC (lscpu "AMD EPYC", family 25 model 1), CPU only, one sweep at a
 # time, measured from the sweeps' own progress lines (run-steps/s = runs x steps per second):
-#   multi_agent    9 runs x 20,000 steps   3 h 5 min (steps 500-15,000 ran in 2 h 21 min at 15.5 run-steps/s, steps 15,000-20,000 in 40 min at 18.7)
+#   multi_agent    9 runs x 40,000 steps   5 h 51 min (steps 500-15,000 in 2 h 21 min at 15.5 run-steps/s, 15,000-20,000 in 40 min at 18.7, 20,000-40,000 in 2 h 46 min at 18.1)
 #   single_agent   9 runs x 40,000 steps   3 h 16 min (1 h 14 min to 15,000 steps, then 15,000-40,000 in 2 h 2 min at 30.8 run-steps/s)
 #   boltzmann_temperatures  15 runs x 4,000 steps   54 min (18.6 run-steps/s)
 #   single_agent_walls_different  3 runs x 15,000 steps   30 min (25.9 run-steps/s)
@@ -35,7 +35,7 @@ cd "$(dirname "$0")/.."
 PY=${PYTHON:-.venv/bin/python}
 SEEDS=${SEEDS:-3}
 STEPS=${STEPS:-}
-MULTI_STEPS=${MULTI_STEPS:-${STEPS:-20000}}
+MULTI_STEPS=${MULTI_STEPS:-${STEPS:-40000}}
 SINGLE_STEPS=${SINGLE_STEPS:-${STEPS:-40000}}
 TEMPERATURE_STEPS=${TEMPERATURE_STEPS:-${STEPS:-4000}}
 WALL_STEPS=${WALL_STEPS:-${STEPS:-15000}}
