@@ -22,7 +22,8 @@
 #   boltzmann_temperatures  15 runs x 22,000 steps   5 h 4 min (4,000 steps in 54 min at 18.6 run-steps/s, 4,000-14,000 in 2 h 18 min at 18.1, 14,000-22,000 in 1 h 52 min at 16.3 then 18.5)
 #   single_agent_walls_different  3 runs x 15,000 steps   30 min (25.9 run-steps/s)
 #   the page (snapshot, figures, claims)     about 5 s
-# The temperature sweep runs 22,000 steps so that it fits beside the others; the two-agent wall
+# The temperature sweep runs 22,000 steps, as far as the page's snapshot has gone (its claim needs
+# 40,000: TEMPERATURE_STEPS=40000 continues the same sweep there); the two-agent wall
 # preset is not part of the default run (WALLS=1 adds it; about as long as multi_agent), and no
 # claim on the page uses it.
 #
