@@ -2,6 +2,7 @@
 session (in-process and subprocess alike), and one tiny sweep that several test files read."""
 
 import contextlib
+import ctypes.util
 import io
 import os
 import pathlib
@@ -12,10 +13,13 @@ import tempfile
 
 import pytest
 
-# MuJoCo chooses its OpenGL backend when `mujoco` is first imported, by whichever test module
-# imports it first; tests/test_render.py compares against MuJoCo's off-screen renderer, which
-# on a headless machine needs OSMesa (apt-get install -y libosmesa6).
-os.environ.setdefault("MUJOCO_GL", "osmesa")
+# MuJoCo chooses its OpenGL backend when `mujoco` is first imported (conftest runs before any test
+# module); tests/test_render.py compares against MuJoCo's off-screen renderer, which on a headless
+# machine needs OSMesa (apt-get install -y libosmesa6). Only where OSMesa is there: with
+# MUJOCO_GL=osmesa and no libOSMesa, `import mujoco` itself fails (mujoco 4), and every test with
+# it; without GL only the renderer comparison skips.
+if "MUJOCO_GL" not in os.environ and ctypes.util.find_library("OSMesa"):
+    os.environ["MUJOCO_GL"] = "osmesa"
 
 # Compiling an MJX step takes ~30 s on a 2-core CPU, and the sweep tests start several
 # processes that compile the same programs: a persistent cache shared by every process of the

@@ -12,10 +12,6 @@ jitted, vmapped scan of a second arena (jitter > 0) that runs the long random ro
 records several tests read.
 """
 
-import os
-
-os.environ.setdefault("MUJOCO_GL", "osmesa")
-
 import mjx_curio  # noqa: E402,F401  (XLA flags before JAX initialises)
 
 import jax  # noqa: E402

@@ -10,14 +10,12 @@
    the view, an agent never sees itself, the floor shows both checker colours.
 
 MuJoCo's renderer needs an off-screen GL: `apt-get install -y libosmesa6` and
-MUJOCO_GL=osmesa. mujoco picks its GL backend when it is first imported, so the variable is set
-here before importing mujoco and also in tests/conftest.py (another test module may import
-mujoco first). Without GL the ground-truth test is skipped, saying so.
+MUJOCO_GL=osmesa. mujoco picks its GL backend when it is first imported, so tests/conftest.py
+sets the variable, where OSMesa is installed, before any test module imports mujoco. Without GL
+the ground-truth test is skipped, saying so.
 """
 
 import os
-
-os.environ.setdefault("MUJOCO_GL", "osmesa")
 
 import mjx_curio  # noqa: E402,F401  (XLA flags before JAX initialises)
 
@@ -151,17 +149,21 @@ def _mujoco_geom_ids(m, d, gl, agent_body, pos, xmat, fovy=90.0):
 @pytest.fixture(scope="module")
 def make_gl():
     """A factory of MuJoCo segmentation renderers; skips the test when no GL can be created."""
-    made = []
+    made, unavailable = [], []
 
     def make(m, width=GT_IMAGE, height=GT_IMAGE):
-        try:
-            gl = mujoco.Renderer(m, height, width)
-        except Exception as err:  # no display, no OSMesa, ...
-            pytest.skip(
-                f"OSMesa/GL unavailable ({type(err).__name__}: {err}); install it with "
-                "`apt-get install -y libosmesa6` and run with MUJOCO_GL=osmesa "
-                f"(now MUJOCO_GL={os.environ.get('MUJOCO_GL')!r})"
-            )
+        # A second failed GL context aborts the process (MuJoCo's fatal-error handler), so once
+        # one has failed, every later test skips with the first one's reason, trying no more.
+        if not unavailable:
+            try:
+                gl = mujoco.Renderer(m, height, width)
+            except Exception as err:  # no display, no OSMesa, ...
+                unavailable.append(
+                    f"OSMesa/GL unavailable ({type(err).__name__}: {err}); install it with "
+                    "`apt-get install -y libosmesa6` and run with MUJOCO_GL=osmesa "
+                    f"(now MUJOCO_GL={os.environ.get('MUJOCO_GL')!r})")
+        if unavailable:
+            pytest.skip(unavailable[0])
         gl.enable_segmentation_rendering()
         made.append(gl)
         return gl
