@@ -39,7 +39,9 @@ class Table:
         keys = list(self.values[0]) if self.values else []
         w = csv.DictWriter(buf, fieldnames=keys, lineterminator="\n")  # the same file on every OS
         w.writeheader()
-        w.writerows(self.values)
+        # 12 significant digits: the last bits of a float differ between CPUs and NumPy builds
+        # (summation order), and a committed CSV should not change with the machine that wrote it.
+        w.writerows({k: f"{v:.12g}" if isinstance(v, float) else v for k, v in row.items()} for row in self.values)
         return buf.getvalue()
 
     def _repr_markdown_(self) -> str:
