@@ -66,7 +66,7 @@ class RunState(NamedTuple):
     key: jax.Array  # uint32 [2], this run's random stream
     step: jax.Array  # int32, agent steps taken
     policy: policies.PolicyParams
-    halted: jax.Array  # bool: a loss went non-finite; the run is frozen at its last good state
+    halted: jax.Array  # bool: a loss or the physics went non-finite; the run is frozen at its last good state
     halted_step: jax.Array  # int32, the step at which it halted, -1 if running
 
 
@@ -105,15 +105,18 @@ def act(cfg: RunConfig, s: RunState) -> tuple[RunState, dict]:
     """One agent step of every agent at once. Returns the new state and this step's metrics.
 
     A halted run does not move: its small state is selected back and its replay buffer is left
-    untouched (`replay.add(..., enabled=False)`); its metrics are masked by `reduce_windows`."""
+    untouched (`replay.add(..., enabled=False)`); its metrics are masked by `reduce_windows`.
+    A physics step that leaves a non-finite position or velocity (the simulation diverged) halts
+    the run the same way, at its last finite state: that step is not taken."""
     arena, lc = cfg.arena, cfg.learner
-    go = ~s.halted
     k_policy, k_next, k_z = jax.random.split(s.key, 3)  # prefix-stable: k_policy, k_next as before k_z
     q = wm.predict_curiosity(lc, s.learner.self_model, s.z, s.carry[1])  # [n, A]
     a = policies.select_agents(s.policy, q, k_policy, s.counts, s.step)
-    replay = replay_lib.add(s.replay, replay_lib.Transition(s.frames, s.z, a, s.carry), enabled=go)
     carry, mix = wm.rnn_step(lc, s.learner.rnn, s.carry, s.z, a)
     env = arena.step(s.env, a)
+    diverged = ~(jnp.all(jnp.isfinite(env.data.qpos)) & jnp.all(jnp.isfinite(env.data.qvel)))
+    go = ~s.halted & ~diverged
+    replay = replay_lib.add(s.replay, replay_lib.Transition(s.frames, s.z, a, s.carry), enabled=go)
     frames, geom_id = arena.render(env)
     z = wm.latent(lc, s.learner.vae, frames, k_z)  # the next step's input and this step's target
     reward = wm.curiosity(lc, z, mix)  # [n]
@@ -127,11 +130,14 @@ def act(cfg: RunConfig, s: RunState) -> tuple[RunState, dict]:
         "view_fraction": view_fractions(arena, geom_id),
         "agent_pose": jnp.concatenate([xy, yaw[:, None]], axis=1),
         "object_pos": arena.object_pos(env),
+        "taken": go,
     }
     moved = (env, carry, frames, z, policies.update_counts_agents(s.counts, a), k_next, s.step + 1)
     kept = (s.env, s.carry, s.frames, s.z, s.counts, s.key, s.step)
     env, carry, frames, z, counts, key, step = jax.tree.map(lambda n, o: jnp.where(go, n, o), moved, kept)
-    new = s._replace(env=env, replay=replay, carry=carry, frames=frames, z=z, counts=counts, key=key, step=step)
+    halt_now = ~s.halted & diverged
+    new = s._replace(env=env, replay=replay, carry=carry, frames=frames, z=z, counts=counts, key=key, step=step,
+                     halted=s.halted | halt_now, halted_step=jnp.where(halt_now, s.step, s.halted_step))
     return new, metrics
 
 
@@ -199,16 +205,15 @@ def run_chunk(cfg: RunConfig, s: RunState, n_steps: int) -> tuple[RunState, dict
         raise ConfigError(f"a chunk of {n_steps} steps must be a multiple of metrics_every={cfg.metrics_every}")
     def period(s, _):
         s, step_m = lax.scan(lambda s, _: act(cfg, s), s, None, length=cfg.update_every)
-        running = ~s.halted  # steps of a halted run were not taken
         s, learn_m = learn(cfg, s)
-        return s, (step_m, learn_m, running)
+        return s, (step_m, learn_m)
 
-    s, (step_m, learn_m, running) = lax.scan(period, s, None, length=n_steps // cfg.update_every)
+    s, (step_m, learn_m) = lax.scan(period, s, None, length=n_steps // cfg.update_every)
     step_m = jax.tree.map(lambda x: x.reshape((n_steps,) + x.shape[2:]), step_m)
-    return s, reduce_windows(cfg, step_m, learn_m, running)
+    return s, reduce_windows(cfg, step_m, learn_m)
 
 
-def reduce_windows(cfg: RunConfig, step_m: dict, learn_m: dict, running) -> dict:
+def reduce_windows(cfg: RunConfig, step_m: dict, learn_m: dict) -> dict:
     """Per-step metrics [T, ...] and per-update metrics [T / update_every, ...] -> windows of
     `metrics_every` steps. See metrics.SCHEMA for the meaning of every output."""
     w = cfg.metrics_every
@@ -217,7 +222,7 @@ def reduce_windows(cfg: RunConfig, step_m: dict, learn_m: dict, running) -> dict
     def win(x, k=w):
         return x.reshape((x.shape[0] // k, k) + x.shape[1:])
 
-    ran = win(jnp.repeat(running, cfg.update_every), w)  # [W, w]: step was actually taken
+    ran = win(step_m["taken"], w)  # [W, w]: step was actually taken (not halted)
     n_ran = jnp.sum(ran, axis=1)  # [W]
 
     def mean_steps(x):  # mean over the steps taken in each window, NaN if none
@@ -244,8 +249,8 @@ def reduce_windows(cfg: RunConfig, step_m: dict, learn_m: dict, running) -> dict
         "contact_object": count_steps(step_m["contact_object"]),
         "contact_agent": count_steps(step_m["contact_agent"]),
         "view_fraction": mean_steps(step_m["view_fraction"]),
-        "agent_pose": last(step_m["agent_pose"]),
-        "object_pos": last(step_m["object_pos"]),
+        "agent_pose": jnp.where(ran[:, -1, None, None], last(step_m["agent_pose"]), jnp.nan),
+        "object_pos": jnp.where(ran[:, -1, None, None], last(step_m["object_pos"]), jnp.nan),
         "steps_taken": n_ran.astype(jnp.int32),
     }
     upd = learn_m["updated"]

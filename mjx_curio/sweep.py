@@ -225,9 +225,11 @@ def _execute(p: Plan, stop: _StopSignals) -> int:
             for r in np.flatnonzero(halted):
                 if str(r) not in halted_info:
                     halted_info[str(r)] = int(halted_at[r])
-                    progress.message(f"run {r} ({p.runs[r].name}): a loss became non-finite (NaN or inf) in the learner "
-                                     f"update at step {int(halted_at[r])}; the update was discarded and the run is halted, "
-                                     f"frozen at its last good state, which its checkpoints keep. The other runs go on.")
+                    what = ("a loss became non-finite (NaN or inf) in the learner update" if m["non_finite"][r].any()
+                            else "the physics diverged (a non-finite position or velocity) in the agent step")
+                    progress.message(f"run {r} ({p.runs[r].name}): {what} at step {int(halted_at[r])}; that update or "
+                                     f"step was discarded and the run is halted, frozen at its last good state, which "
+                                     f"its checkpoints keep. The other runs go on.")
         if step % v["checkpoint_every"] == 0 or step == steps or step in checkpoint_steps:
             save(step)
             last_saved = step
@@ -251,7 +253,7 @@ def _execute(p: Plan, stop: _StopSignals) -> int:
               f"  manifest    {p.out / 'manifest.json'}\n  metrics     {p.out / 'metrics'}/*.npy\n"
               f"  checkpoints {ckpts_dir}/state/<step> (newest {step})", file=sys.stderr)
         if halted_info:
-            print(f"{len(halted_info)} run(s) halted on a non-finite loss: "
+            print(f"{len(halted_info)} run(s) halted on a non-finite loss or physics state: "
                   + ", ".join(f"{p.runs[int(r)].name} at step {s}" for r, s in halted_info.items()), file=sys.stderr)
             return 1
     return 0

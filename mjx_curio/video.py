@@ -195,7 +195,7 @@ def rollout(sweep, run=0, step: int = -1, n_frames: int = 300, top: int = 192, l
         step = steps[-1]
     state, exact = restore_run(sweep, r.index, step)
     if bool(state.halted):
-        print(f"note: run {r.name} is halted at step {int(state.halted_step)} (a non-finite loss); it does not move",
+        print(f"note: run {r.name} is halted at step {int(state.halted_step)} (a non-finite loss or physics state); it does not move",
               file=sys.stderr)
     cfg = sweep.run_config()
     acts, learn_fn = programs(cfg, int(top))

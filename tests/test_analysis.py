@@ -118,6 +118,26 @@ def test_find_sweeps(tiny_sweeps_dir, tiny_sweep):
 # ---------------------------------------------------------------------------------- statistics
 
 
+def test_windows_after_a_diverged_simulation_are_dropped():
+    # Three runs, six windows of 20 steps: run 1's physics goes NaN in window 3 while it still steps
+    # (a sweep from before such runs halted); run 2 halted at window 2 (its pose is NaN by design).
+    steps = np.arange(1, 7) * 20
+    taken = np.full((3, 6), 20, np.int32)
+    taken[2, 2:] = 0
+    pose = np.ones((3, 6, 2, 3), np.float32)
+    pose[1, 3:, 0, 1] = np.nan
+    pose[2, 2:] = np.nan
+    metrics = {"steps_taken": taken, "agent_pose": pose, "object_pos": np.ones((3, 6, 4, 3), np.float32),
+               "curiosity": np.full((3, 6, 2), 0.5, np.float32), "action_counts": np.ones((3, 6, 2, 7), np.int32)}
+    before = {k: v.copy() for k, v in metrics.items()}
+    assert an.drop_diverged(metrics, steps) == {"1": 80}
+    for k, v in metrics.items():
+        np.testing.assert_array_equal(v[[0, 2]], before[k][[0, 2]], err_msg=k)  # the others untouched
+        np.testing.assert_array_equal(v[1, :3], before[k][1, :3], err_msg=k)  # before it, too
+    assert np.isnan(metrics["curiosity"][1, 3:]).all() and np.isnan(metrics["object_pos"][1, 3:]).all()
+    assert (metrics["steps_taken"][1, 3:] == 0).all() and (metrics["action_counts"][1, 3:] == 0).all()
+
+
 def test_moving_average_matches_numpy():
     rng = np.random.default_rng(0)
     x = rng.normal(size=(3, 120))

@@ -306,6 +306,47 @@ def test_a_nan_loss_halts_that_run_only_and_keeps_its_last_good_state(tiny_sweep
     assert all(np.isfinite(x).all() for x in jax.tree.leaves(halted))
 
 
+def _poison_physics(monkeypatch, run: int, at_step: int):
+    """Fill run `run`'s joint velocities with NaN when the sweep reaches `at_step`: its next
+    physics step diverges, as a simulation that blows up does. The program's chunk wrapped for
+    this test only."""
+    import jax.numpy as jnp
+
+    from mjx_curio import program
+
+    real = program.SweepProgram.chunk
+
+    def chunk(self, states):
+        if int(np.asarray(states.step)[0]) == at_step:
+            qvel = states.env.data.qvel
+            bad = (jnp.arange(qvel.shape[0]) == run).reshape((-1,) + (1,) * (qvel.ndim - 1))
+            data = states.env.data.replace(qvel=jnp.where(bad, jnp.nan, qvel))
+            states = states._replace(env=states.env.replace(data=data))
+        return real(self, states)
+
+    monkeypatch.setattr(program.SweepProgram, "chunk", chunk)
+
+
+def test_diverged_physics_halts_that_run_only_and_masks_its_windows(tiny_sweep, tmp_path, monkeypatch):
+    out = tmp_path / "diverged"
+    bad = 5
+    _poison_physics(monkeypatch, run=bad, at_step=100)
+    rc, stderr = sweep_in_process(*TINY_SWEEP, f"out={out}", check=False)
+    assert rc == 1, stderr[-2000:]
+    name = json.loads((out / "manifest.json").read_text())["runs"][bad]["name"]
+    assert f"run {bad} ({name}): the physics diverged" in stderr
+    assert json.loads((out / "progress.json").read_text())["halted"] == {str(bad): 100}
+
+    clean, m = _metrics(tiny_sweep), _metrics(out)
+    others = [r for r in range(N_RUNS) if r != bad]
+    _assert_same_metrics({k: v[others] for k, v in m.items()}, {k: v[others] for k, v in clean.items()}, "other runs")
+    _assert_same_metrics({k: v[bad, :5] for k, v in m.items()}, {k: v[bad, :5] for k, v in clean.items()}, "before")
+    # From step 100 on no step was taken: nothing counted, no pose or curiosity recorded.
+    assert (m["steps_taken"][bad, 5:] == 0).all() and (m["action_counts"][bad, 5:] == 0).all()
+    assert np.isnan(m["curiosity"][bad, 5:]).all() and (m["updates"][bad, 5:] == 0).all()
+    assert int(_state(out, 200)["step"][bad]) == 100
+
+
 # --------------------------------------------------------------------------------- bad input
 
 

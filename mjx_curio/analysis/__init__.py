@@ -143,6 +143,7 @@ from mjx_curio.analysis.sweeps import (
     Sweep,
     SweepError,
     _quiet_orbax,  # video.py reads checkpoints with it
+    drop_diverged,
     find_sweeps,
     learner_config,
     load,
@@ -155,8 +156,8 @@ from mjx_curio.analysis.tables import Table, headline_table
 
 __all__ = [
     # sweeps
-    "FORMAT", "POLICY_LABELS", "SETTINGS", "SWEEP_OUTPUTS", "Group", "Run", "Sweep", "SweepError", "find_sweeps",
-    "learner_config", "load", "load_sweeps", "pick_single_multi", "run_config", "run_specs",
+    "FORMAT", "POLICY_LABELS", "SETTINGS", "SWEEP_OUTPUTS", "Group", "Run", "Sweep", "SweepError", "drop_diverged",
+    "find_sweeps", "learner_config", "load", "load_sweeps", "pick_single_multi", "run_config", "run_specs",
     # stats
     "OBS_CLASSES", "action_totals", "agent_contacts", "bin_windows", "cumulative_interactions",
     "interaction_frequency", "mean_ci", "mean_sd", "moving_average", "object_contacts", "observation_classes",

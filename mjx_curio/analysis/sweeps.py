@@ -239,7 +239,7 @@ class Sweep:
             f"  checkpoints at steps: {', '.join(map(str, ckpts)) or 'none'}",
         ]
         if halted:
-            lines.append("  halted runs (non-finite loss): " + ", ".join(f"{self.runs[int(r)].name} at {s}" for r, s in halted.items()))
+            lines.append("  halted runs (non-finite loss or physics): " + ", ".join(f"{self.runs[int(r)].name} at {s}" for r, s in halted.items()))
         return "\n".join(lines)
 
     def __repr__(self) -> str:
@@ -364,7 +364,30 @@ def load(path: str | pathlib.Path) -> Sweep:
         if arr.shape != shape:
             raise SweepError(f"{f} has shape {arr.shape}; the manifest says {shape} ({', '.join(spec['dims'])})")
         metrics[name] = np.array(arr[:, :windows_done])
+    diverged = drop_diverged(metrics, steps)
+    if diverged:
+        progress = {**progress, "halted": {**progress.get("halted", {}), **diverged}}
     return Sweep(path, manifest, progress, steps, metrics)
+
+
+def drop_diverged(metrics: dict[str, np.ndarray], steps: np.ndarray) -> dict[str, int]:
+    """Blank, in place, every window of a run from the first one whose physics state is not
+    finite (a NaN agent pose or object position in a window that took steps) to the end, as a
+    halted run's windows are (NaN, or 0 for counts); returns {run index: first such window's
+    step}. Sweeps written before a diverged simulation halted its run kept stepping the NaN
+    state, and its views, curiosity and losses from then on are not data."""
+    if "agent_pose" not in metrics or "object_pos" not in metrics or "steps_taken" not in metrics:
+        return {}
+    n, w = metrics["steps_taken"].shape
+    state = np.concatenate([metrics["agent_pose"].reshape(n, w, -1), metrics["object_pos"].reshape(n, w, -1)], axis=2)
+    bad = ~np.isfinite(state).all(axis=2) & (metrics["steps_taken"] > 0)
+    found = {}
+    for r in np.flatnonzero(bad.any(axis=1)):
+        first = int(np.argmax(bad[r]))
+        for x in metrics.values():
+            x[r, first:] = np.nan if np.issubdtype(x.dtype, np.floating) else 0
+        found[str(r)] = int(steps[first])
+    return found
 
 
 def find_sweeps(path: str | pathlib.Path) -> list[pathlib.Path]:
