@@ -4,7 +4,7 @@
 #     bash experiments/reproduce.sh      # the scale of docs/results.md: 3 seeds; 40,000 steps a run
 #                                        # with one or two agents, 22,000 for temperatures,
 #                                        # 15,000 for the wall variants
-#     SEEDS=8 STEPS=80000 WALLS=1 bash experiments/reproduce.sh
+#     SEEDS=8 STEPS=80000 bash experiments/reproduce.sh
 #                                        # the paper's full scale (see below)
 #
 # Run lengths: STEPS, when given, sets every sweep's; MULTI_STEPS (multi_agent), SINGLE_STEPS
@@ -21,15 +21,15 @@
 #   single_agent   9 runs x 40,000 steps   3 h 16 min (1 h 14 min to 15,000 steps, then 15,000-40,000 in 2 h 2 min at 30.8 run-steps/s)
 #   boltzmann_temperatures  15 runs x 22,000 steps   5 h 4 min (4,000 steps in 54 min at 18.6 run-steps/s, 4,000-14,000 in 2 h 18 min at 18.1, 14,000-22,000 in 1 h 52 min at 16.3 then 18.5)
 #   single_agent_walls_different  3 runs x 15,000 steps   30 min (25.9 run-steps/s)
+#   multi_agent_walls_different   9 runs x 15,000 steps   59 min (38.3 run-steps/s), on another 2-core AMD
+#                                 EPYC (family 26 model 2, with AVX-512 and bf16): not comparable with the rows above
 #   the page (snapshot, figures, claims)     about 5 s
 # The temperature sweep runs 22,000 steps, as far as the page's snapshot has gone (its claim needs
-# 40,000: TEMPERATURE_STEPS=40000 continues the same sweep there); the two-agent wall
-# preset is not part of the default run (WALLS=1 adds it; about as long as multi_agent), and no
-# claim on the page uses it.
+# 40,000: TEMPERATURE_STEPS=40000 continues the same sweep there).
 #
 # The paper's full scale (8 seeds, 80,000 steps, every preset) is a GPU job: install the CUDA
 # extra (pip install -e '.[cuda]') and run
-#     SEEDS=8 STEPS=80000 WALLS=1 bash experiments/reproduce.sh
+#     SEEDS=8 STEPS=80000 bash experiments/reproduce.sh
 # which is the presets' own default scale (python -m mjx_curio.sweep preset=<name>).
 set -euo pipefail
 cd "$(dirname "$0")/.."
@@ -40,7 +40,6 @@ MULTI_STEPS=${MULTI_STEPS:-${STEPS:-40000}}
 SINGLE_STEPS=${SINGLE_STEPS:-${STEPS:-40000}}
 TEMPERATURE_STEPS=${TEMPERATURE_STEPS:-${STEPS:-22000}}
 WALL_STEPS=${WALL_STEPS:-${STEPS:-15000}}
-WALLS=${WALLS:-0}
 # Bad settings stop here, before any sweep starts (a sweep advances in chunks of 100 steps).
 for knob in SEEDS STEPS MULTI_STEPS SINGLE_STEPS TEMPERATURE_STEPS WALL_STEPS; do
     value=${!knob}
@@ -50,7 +49,6 @@ for knob in SEEDS STEPS MULTI_STEPS SINGLE_STEPS TEMPERATURE_STEPS WALL_STEPS; d
         exit 2
     fi
 done
-if [[ $WALLS != 0 && $WALLS != 1 ]]; then echo "reproduce.sh: WALLS=$WALLS: want 0 or 1" >&2; exit 2; fi
 
 sweep() {  # sweep PRESET STEPS: start it, or continue it where it stopped (or grow it to STEPS)
     local preset=$1 steps=$2
@@ -64,7 +62,7 @@ sweep multi_agent "$MULTI_STEPS"
 sweep single_agent "$SINGLE_STEPS"
 sweep boltzmann_temperatures "$TEMPERATURE_STEPS"
 sweep single_agent_walls_different "$WALL_STEPS"
-if [[ $WALLS == 1 ]]; then sweep multi_agent_walls_different "$WALL_STEPS"; fi
+sweep multi_agent_walls_different "$WALL_STEPS"
 
 "$PY" experiments/results.py snapshot runs/paper
 "$PY" experiments/results.py page

@@ -185,6 +185,24 @@ def _interactions(presets):
     return fig
 
 
+def _walls_single(presets):
+    """Figs. 15, 14 and 12 of the walls-different experiment, one agent, ε-greedy, stacked."""
+    import matplotlib.pyplot as plt
+
+    from mjx_curio import analysis as an
+
+    s = presets["single_agent_walls_different"]
+    g = s.group("eps")
+    fig, axes = plt.subplots(3, 1, figsize=(8, 8.4))
+    an.plot_curiosity(s, axes[0], g)
+    an.plot_interaction_frequency(s, axes[1], g, every=500)
+    an.plot_action_histogram(s, axes[2], g)
+    for ax in axes:
+        ax.yaxis.label.set_fontsize(8)  # stacked panels: the long labels must not run into each other
+    fig.tight_layout()
+    return fig
+
+
 def _single_vs_multi(presets):
     import matplotlib.pyplot as plt
 
@@ -215,6 +233,14 @@ def _figures() -> tuple[Figure, ...]:
         Figure("single_agent_curiosity", ("single_agent",),
                curiosity.replace("{who}", "one agent").replace("{paper}", "fig. 8 (ε-greedy)"),
                _policy_panels("single_agent", an.plot_curiosity)),
+        Figure("single_agent_walls_different", ("single_agent_walls_different",),
+               "One agent, ε-greedy (ε = 0.2), a different texture on every wall. Top: the curiosity reward "
+               "(squared latent distance, unitless; thin line every 20th step, thick line its moving average over "
+               "1,000 steps). Middle: the share of agent steps touching each object, averaged over bins of 500 "
+               "steps. Bottom: how often each action was chosen over the whole run. x: agent steps (top, middle), "
+               "the seven actions (bottom). Means over {seeds} seeds with 95 % confidence bands and error bars "
+               "across seeds. Paper: figs. 15, 14 and 12 (one run, 80,000 steps).",
+               _walls_single),
         Figure("single_agent_objects", ("single_agent",),
                "How often the single agent touches each of the four objects over training, one panel per policy. "
                "x: agent steps; y: the share of agent steps in contact with the object, averaged over bins of 500 "
@@ -222,6 +248,11 @@ def _figures() -> tuple[Figure, ...]:
                "toppled) roll; the pyramid and the disc can only slide. Paper: fig. 9 (ε-greedy, one run).",
                _policy_panels("single_agent", lambda s, ax, g: an.plot_interaction_frequency(s, ax, g, every=500),
                               height=2.6)),
+        Figure("multi_agent_walls_different_curiosity", ("multi_agent_walls_different",),
+               curiosity.replace("{who}", "two agents (green and purple), a different texture on every wall")
+               .replace("Paper: {paper}, one run each.", "Paper: none (section 3.1 says both arenas were run; "
+                        "only section 4.1.1's one-agent run is named as having different walls)."),
+               _policy_panels("multi_agent_walls_different", an.plot_curiosity)),
         Figure("single_agent_actions", ("single_agent",),
                "How often the single agent chose each action over the whole run, one panel per policy. x: the seven "
                "actions; y: number of agent steps the action was chosen, mean over {seeds} seeds, error bars 95 % "

@@ -145,10 +145,11 @@ def test_page_blocks_on_the_tiny_sweeps(results, tiny_sweeps_dir, tmp_path):
     drawn = sorted(p.stem for p in (tmp_path / "fig").glob("*.png"))
     assert drawn == sorted(f.name for f in results._figures() if set(f.needs) <= set(presets))
     assert len(drawn) == 9 and figures.count("![") == 9
-    # The temperature figures too, with the tiny two-agent sweep (it has a Boltzmann group) standing in.
-    presets["boltzmann_temperatures"] = presets["multi_agent"]
+    # The temperature and wall figures too, the tiny sweeps of matching agent count standing in.
+    presets["boltzmann_temperatures"] = presets["multi_agent_walls_different"] = presets["multi_agent"]
+    presets["single_agent_walls_different"] = presets["single_agent"]
     results.figures_block(presets, out=tmp_path / "all")
-    assert len(list((tmp_path / "all").glob("*.png"))) == 11
+    assert len(list((tmp_path / "all").glob("*.png"))) == len(results._figures()) == 13
 
 
 def test_bad_command_lines_are_messages_not_tracebacks(results, tmp_path, capsys):
@@ -166,7 +167,6 @@ def test_bad_command_lines_are_messages_not_tracebacks(results, tmp_path, capsys
     ("TEMPERATURE_STEPS=abc", "TEMPERATURE_STEPS=abc: want a positive whole number"),
     ("MULTI_STEPS=7", "MULTI_STEPS=7: want a positive whole number, a multiple of 100"),
     ("SEEDS=0", "SEEDS=0: want a positive whole number"),
-    ("WALLS=2", "WALLS=2: want 0 or 1"),
 ])
 def test_reproduce_refuses_bad_settings_before_any_sweep(setting, message):
     import os
@@ -182,8 +182,8 @@ def test_reproduce_refuses_bad_settings_before_any_sweep(setting, message):
 
 @pytest.mark.parametrize("settings, want", [
     ({}, {"multi_agent": 40000, "single_agent": 40000, "boltzmann_temperatures": 22000,
-          "single_agent_walls_different": 15000}),
-    ({"STEPS": "80000", "SINGLE_STEPS": "30000", "WALLS": "1"},
+          "single_agent_walls_different": 15000, "multi_agent_walls_different": 15000}),
+    ({"STEPS": "80000", "SINGLE_STEPS": "30000"},
      {"multi_agent": 80000, "single_agent": 30000, "boltzmann_temperatures": 80000,
       "single_agent_walls_different": 80000, "multi_agent_walls_different": 80000}),
 ])
@@ -194,7 +194,7 @@ def test_reproduce_run_lengths_per_sweep_and_steps_for_all(settings, want):
 
     # PYTHON=echo prints each command instead of running it: nothing is swept or written.
     env = {k: v for k, v in os.environ.items()
-           if k not in ("SEEDS", "STEPS", "MULTI_STEPS", "SINGLE_STEPS", "TEMPERATURE_STEPS", "WALL_STEPS", "WALLS")}
+           if k not in ("SEEDS", "STEPS", "MULTI_STEPS", "SINGLE_STEPS", "TEMPERATURE_STEPS", "WALL_STEPS")}
     env.update(settings, PYTHON="echo")
     done = subprocess.run(["bash", str(ROOT / "experiments" / "reproduce.sh")], env=env, capture_output=True,
                           text=True, timeout=60)
