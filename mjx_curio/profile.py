@@ -207,10 +207,10 @@ def theoretical_peak() -> dict:
     }
 
 
-def matmul_peak(n: int, repeats: int) -> float:
-    """Achievable float32 GFLOP/s: the best of `repeats` n x n @ n x n matmuls after a warm-up."""
-    a = jax.random.normal(jax.random.key(1), (n, n), jnp.float32)
-    b = jax.random.normal(jax.random.key(2), (n, n), jnp.float32)
+def matmul_peak(n: int, repeats: int, dtype=jnp.float32) -> float:
+    """Achievable GFLOP/s in `dtype`: the best of `repeats` n x n @ n x n matmuls after a warm-up."""
+    a = jax.random.normal(jax.random.key(1), (n, n), dtype)
+    b = jax.random.normal(jax.random.key(2), (n, n), dtype)
     f = jax.jit(jnp.matmul).lower(a, b).compile()
     jax.block_until_ready(f(a, b))
     best = float("inf")
@@ -364,6 +364,9 @@ def profile(args: dict, time_fn) -> dict:
     measure("learner_update", lambda st, bt, k: wm.learner_update(lc, st, bt, k), (learner, batch, key), 1.0 / ue)
 
     peak = matmul_peak(args["peak_n"], repeats)
+    # The same matmul in bfloat16: whether XLA's CPU backend runs it faster than float32 here
+    # (native bf16 instructions), which would make bf16 learner arithmetic worth testing.
+    peak_bf16 = matmul_peak(args["peak_n"], repeats, jnp.bfloat16)
     theory = theoretical_peak()
     names = [name for name, _ in COMPONENTS if name in rows]
     summed = [name for name, when in COMPONENTS if when != "ref" and name in rows]
@@ -393,6 +396,7 @@ def profile(args: dict, time_fn) -> dict:
         "cpu_model": cpu_model(),
         "peak_matmul_n": args["peak_n"],
         "peak_matmul_gflops": round(peak, 1),
+        "peak_matmul_bf16_gflops": round(peak_bf16, 1),
         **theory,
         "run_step_ms": None if whole_ms is None else round(whole_ms, 3),
         "sum_of_parts_ms": round(sum_ms, 3),
@@ -438,6 +442,7 @@ def table(result: dict) -> str:
         f"%peak: of {result['peak_matmul_gflops']} GFLOP/s achievable ({result['peak_matmul_n']}^3 float32 matmul,"
         f" best of {max(result['repeats'], 3)}, measured now). Theoretical {result['theoretical_gflops']} GFLOP/s ="
         f" {result['cores']} cores x {result['ghz']} GHz ({result['clock_from']}) x {result['flop_per_cycle']}"
-        f" FLOP/cycle ({result['isa']}): an estimate. CPU: {result['cpu_model']}.",
+        f" FLOP/cycle ({result['isa']}): an estimate. The same matmul in bfloat16:"
+        f" {result.get('peak_matmul_bf16_gflops', 'not measured')} GFLOP/s. CPU: {result['cpu_model']}.",
     ]
     return "\n".join(lines)

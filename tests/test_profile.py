@@ -27,7 +27,8 @@ def _encoder_flops(lc: LearnerConfig) -> float:
 def test_encoder_flops_match_a_hand_count(capsys):
     result = bench.main(["what=profile", "parts=encoding,memory,self_models", *TINY])
     out = capsys.readouterr().out
-    assert "encoding" in out and '"what": "profile"' in out
+    assert "encoding" in out and '"what": "profile"' in out and "The same matmul in bfloat16: " in out
+    assert result["peak_matmul_gflops"] > 0 and result["peak_matmul_bf16_gflops"] > 0
     comps = result["components"]
     assert set(comps) == {"encoding", "memory", "self_models"}
     for row in comps.values():
