@@ -262,41 +262,58 @@ def assert_same_runs_on_other_devices(out, reference, what: str):
         _assert_same_tree(a[leaf], b[leaf], f"{what}, after {end} steps: {leaf}")
 
 
-def _poison_replay_carry(monkeypatch, run: int, at_step: int):
-    """Fill run `run`'s stored LSTM states in replay with NaN when the sweep reaches `at_step`:
-    its next MDN-RNN BPTT starts from one, so the loss is NaN (whatever latents it trains on).
-    The program's chunk wrapped for this test only."""
-    import jax.numpy as jnp
-
+def _poison_at(monkeypatch, at_step: int, edit):
+    """Replace the states with `edit(states)` when the sweep reaches `at_step`: the program's chunk
+    wrapped for this test only."""
     from mjx_curio import program
 
     real = program.SweepProgram.chunk
 
     def chunk(self, states):
         if int(np.asarray(states.step)[0]) == at_step:
-            c, h = states.replay.carry
-            bad = (jnp.arange(c.shape[0]) == run)[:, None, None]
-            carry = (jnp.where(bad, jnp.nan, c), jnp.where(bad, jnp.nan, h))
-            states = states._replace(replay=states.replay._replace(carry=carry))
+            states = edit(states)
         return real(self, states)
 
     monkeypatch.setattr(program.SweepProgram, "chunk", chunk)
 
 
-def test_a_nan_loss_halts_that_run_only_and_keeps_its_last_good_state(tiny_sweep, tmp_path, monkeypatch):
-    out = tmp_path / "nan"
-    bad = 3
-    _poison_replay_carry(monkeypatch, run=bad, at_step=100)
+def _nan_in_run(x, run: int):
+    """x [runs, ...] with run `run`'s entries NaN."""
+    import jax.numpy as jnp
+
+    return jnp.where((jnp.arange(x.shape[0]) == run).reshape((-1,) + (1,) * (x.ndim - 1)), jnp.nan, x)
+
+
+def _poison_replay_carry(monkeypatch, run: int, at_step: int):
+    """Fill run `run`'s stored LSTM states in replay with NaN when the sweep reaches `at_step`:
+    its next MDN-RNN BPTT starts from one, so the loss is NaN (whatever latents it trains on)."""
+    def edit(states):
+        carry = tuple(_nan_in_run(x, run) for x in states.replay.carry)
+        return states._replace(replay=states.replay._replace(carry=carry))
+
+    _poison_at(monkeypatch, at_step, edit)
+
+
+def _sweep_halting_one_run(tiny_sweep, out, bad: int, says: str, halted_at: int) -> dict:
+    """The tiny sweep into `out` with a fault planted in run `bad`: the sweep exits 1 saying
+    `says` of that run, records it halted at `halted_at`, and every other run, and this one's
+    first 5 windows (steps 0-100), are as in the clean sweep. Returns the metrics."""
     rc, stderr = sweep_in_process(*TINY_SWEEP, f"out={out}", check=False)
     assert rc == 1, stderr[-2000:]
     name = json.loads((out / "manifest.json").read_text())["runs"][bad]["name"]
-    assert f"run {bad} ({name}): a loss became non-finite" in stderr
-    assert json.loads((out / "progress.json").read_text())["halted"] == {str(bad): 104}
-
+    assert f"run {bad} ({name}): {says}" in stderr
+    assert json.loads((out / "progress.json").read_text())["halted"] == {str(bad): halted_at}
     clean, m = _metrics(tiny_sweep), _metrics(out)
     others = [r for r in range(N_RUNS) if r != bad]
     _assert_same_metrics({k: v[others] for k, v in m.items()}, {k: v[others] for k, v in clean.items()}, "other runs")
     _assert_same_metrics({k: v[bad, :5] for k, v in m.items()}, {k: v[bad, :5] for k, v in clean.items()}, "before")
+    return m
+
+
+def test_a_nan_loss_halts_that_run_only_and_keeps_its_last_good_state(tiny_sweep, tmp_path, monkeypatch):
+    out, bad = tmp_path / "nan", 3
+    _poison_replay_carry(monkeypatch, run=bad, at_step=100)
+    m = _sweep_halting_one_run(tiny_sweep, out, bad, "a loss became non-finite", 104)
     assert m["non_finite"][bad, 5] == 1 and m["steps_taken"][bad, 5] == 4 and (m["steps_taken"][bad, 6:] == 0).all()
     assert np.isnan(m["curiosity"][bad, 6:]).all()
     # Its last good state: the networks after the update at step 100, the last one that was finite.
@@ -308,39 +325,18 @@ def test_a_nan_loss_halts_that_run_only_and_keeps_its_last_good_state(tiny_sweep
 
 def _poison_physics(monkeypatch, run: int, at_step: int):
     """Fill run `run`'s joint velocities with NaN when the sweep reaches `at_step`: its next
-    physics step diverges, as a simulation that blows up does. The program's chunk wrapped for
-    this test only."""
-    import jax.numpy as jnp
+    physics step diverges, as a simulation that blows up does."""
+    def edit(states):
+        data = states.env.data.replace(qvel=_nan_in_run(states.env.data.qvel, run))
+        return states._replace(env=states.env.replace(data=data))
 
-    from mjx_curio import program
-
-    real = program.SweepProgram.chunk
-
-    def chunk(self, states):
-        if int(np.asarray(states.step)[0]) == at_step:
-            qvel = states.env.data.qvel
-            bad = (jnp.arange(qvel.shape[0]) == run).reshape((-1,) + (1,) * (qvel.ndim - 1))
-            data = states.env.data.replace(qvel=jnp.where(bad, jnp.nan, qvel))
-            states = states._replace(env=states.env.replace(data=data))
-        return real(self, states)
-
-    monkeypatch.setattr(program.SweepProgram, "chunk", chunk)
+    _poison_at(monkeypatch, at_step, edit)
 
 
 def test_diverged_physics_halts_that_run_only_and_masks_its_windows(tiny_sweep, tmp_path, monkeypatch):
-    out = tmp_path / "diverged"
-    bad = 5
+    out, bad = tmp_path / "diverged", 5
     _poison_physics(monkeypatch, run=bad, at_step=100)
-    rc, stderr = sweep_in_process(*TINY_SWEEP, f"out={out}", check=False)
-    assert rc == 1, stderr[-2000:]
-    name = json.loads((out / "manifest.json").read_text())["runs"][bad]["name"]
-    assert f"run {bad} ({name}): the physics diverged" in stderr
-    assert json.loads((out / "progress.json").read_text())["halted"] == {str(bad): 100}
-
-    clean, m = _metrics(tiny_sweep), _metrics(out)
-    others = [r for r in range(N_RUNS) if r != bad]
-    _assert_same_metrics({k: v[others] for k, v in m.items()}, {k: v[others] for k, v in clean.items()}, "other runs")
-    _assert_same_metrics({k: v[bad, :5] for k, v in m.items()}, {k: v[bad, :5] for k, v in clean.items()}, "before")
+    m = _sweep_halting_one_run(tiny_sweep, out, bad, "the physics diverged", 100)
     # From step 100 on no step was taken: nothing counted, no pose or curiosity recorded.
     assert (m["steps_taken"][bad, 5:] == 0).all() and (m["action_counts"][bad, 5:] == 0).all()
     assert np.isnan(m["curiosity"][bad, 5:]).all() and (m["updates"][bad, 5:] == 0).all()
