@@ -56,8 +56,8 @@ SCHEMA: dict[str, Metric] = {
     "contact_agent": Metric("int32", A, "steps", "steps of the window in which the agent touched the other agent"),
     "view_fraction": Metric("float32", ("agents", "view_targets"), "fraction of pixels",
                             "share of the agent's view showing each object, then the other agent; mean over the window"),
-    "agent_pose": Metric("float32", ("agents", "pose"), "m, m, rad", "x, y and heading of each agent at the window's end (NaN once the run is halted)"),
-    "object_pos": Metric("float32", ("objects", "xyz"), "m", "position of each object's body origin at the window's end (NaN once the run is halted)"),
+    "agent_pose": Metric("float32", ("agents", "pose"), "m, m, rad", "x, y and heading of each agent at the window's end (frozen once the run is halted)"),
+    "object_pos": Metric("float32", ("objects", "xyz"), "m", "position of each object's body origin at the window's end (frozen once the run is halted)"),
     "steps_taken": Metric("int32", (), "steps", "steps the run actually took in the window (fewer once halted)"),
     "vae_loss": Metric("float32", (), "nats (summed over pixels and agents)",
                        "VAE loss (eq. 5: reconstruction + beta * KL, with free bits if kl_tolerance > 0), "

@@ -120,7 +120,6 @@ def act(cfg: RunConfig, s: RunState) -> tuple[RunState, dict]:
     frames, geom_id = arena.render(env)
     z = wm.latent(lc, s.learner.vae, frames, k_z)  # the next step's input and this step's target
     reward = wm.curiosity(lc, z, mix)  # [n]
-    xy, yaw = arena.agent_pose(env)
     metrics = {
         "curiosity": reward,
         "predicted": jnp.take_along_axis(q, a[:, None], axis=1)[:, 0],
@@ -128,13 +127,15 @@ def act(cfg: RunConfig, s: RunState) -> tuple[RunState, dict]:
         "contact_object": env.touch,
         "contact_agent": env.touch_agent,
         "view_fraction": view_fractions(arena, geom_id),
-        "agent_pose": jnp.concatenate([xy, yaw[:, None]], axis=1),
-        "object_pos": arena.object_pos(env),
         "taken": go,
     }
     moved = (env, carry, frames, z, policies.update_counts_agents(s.counts, a), k_next, s.step + 1)
     kept = (s.env, s.carry, s.frames, s.z, s.counts, s.key, s.step)
     env, carry, frames, z, counts, key, step = jax.tree.map(lambda n, o: jnp.where(go, n, o), moved, kept)
+    # Poses of the state kept: a halted run's stay those of its last good state, never a diverged step's.
+    xy, yaw = arena.agent_pose(env)
+    metrics["agent_pose"] = jnp.concatenate([xy, yaw[:, None]], axis=1)
+    metrics["object_pos"] = arena.object_pos(env)
     halt_now = ~s.halted & diverged
     new = s._replace(env=env, replay=replay, carry=carry, frames=frames, z=z, counts=counts, key=key, step=step,
                      halted=s.halted | halt_now, halted_step=jnp.where(halt_now, s.step, s.halted_step))
@@ -249,8 +250,8 @@ def reduce_windows(cfg: RunConfig, step_m: dict, learn_m: dict) -> dict:
         "contact_object": count_steps(step_m["contact_object"]),
         "contact_agent": count_steps(step_m["contact_agent"]),
         "view_fraction": mean_steps(step_m["view_fraction"]),
-        "agent_pose": jnp.where(ran[:, -1, None, None], last(step_m["agent_pose"]), jnp.nan),
-        "object_pos": jnp.where(ran[:, -1, None, None], last(step_m["object_pos"]), jnp.nan),
+        "agent_pose": last(step_m["agent_pose"]),
+        "object_pos": last(step_m["object_pos"]),
         "steps_taken": n_ran.astype(jnp.int32),
     }
     upd = learn_m["updated"]

@@ -22,6 +22,7 @@ import numpy as np
 import pytest
 
 from conftest import CACHE, TINY_SWEEP, run_sweep, sweep_in_process
+from mjx_curio import analysis as an
 from mjx_curio import checkpoint as ckpt_lib
 from mjx_curio import sweep as sweep_lib
 from mjx_curio.config import ConfigError
@@ -307,6 +308,10 @@ def _sweep_halting_one_run(tiny_sweep, out, bad: int, says: str, halted_at: int)
     others = [r for r in range(N_RUNS) if r != bad]
     _assert_same_metrics({k: v[others] for k, v in m.items()}, {k: v[others] for k, v in clean.items()}, "other runs")
     _assert_same_metrics({k: v[bad, :5] for k, v in m.items()}, {k: v[bad, :5] for k, v in clean.items()}, "before")
+    # A halted run keeps the pose of its last good state, so the analysis sees a halt, not a
+    # divergence to drop (analysis.drop_diverged), and reads the step it halted at as recorded.
+    assert np.isfinite(m["agent_pose"][bad]).all() and np.isfinite(m["object_pos"][bad]).all()
+    assert an.load(out).progress["halted"] == {str(bad): halted_at}
     return m
 
 
