@@ -134,17 +134,39 @@ def tiny_sweeps_dir(tmp_path_factory, tiny_single_started, tiny_sweep, tiny_sing
 
 
 # ------------------------------------------------------------------------------------------------
-# The tiny sweep on two forced host devices (tests/test_sweep.py). Its program is its own (nothing
-# in the cache to share), so it is started as soon as the session knows it will need it, and
-# compiles on the second core while the other tests run.
+# Sweeps made in a background process, started as soon as collection shows that a test to be run
+# reads one: each is its own program (nothing in the cache to share), so it compiles on the second
+# core while the tests before it run on the first.
 
-SHARDED_TEST = "test_sharding_gives_every_device_its_own_runs_with_their_own_keys"
-_sharded: dict = {}
+# The smallest sweep there is: one agent, 8 px, tiny networks, 40 steps; it runs every stage (plan,
+# lock, program, chunks, metrics, checkpoints, manifest). Compiling it (mostly MJX's physics) is the
+# quick tier's longest wait.
+MINIMAL_SWEEP = ("agents=1", "policies=eps,ucb", "seeds=1", "image=8", "latent=4", "vae_channels=4,8",
+                 "dec_channels=4,4", "rnn_hidden=8", "mixtures=2", "self_hidden=8", "batch=2", "seq_len=4", "buffer=40",
+                 "steps=40", "chunk=20", "checkpoint_every=20", "keep_steps=20", "keep_every=0", "progress=false")
+
+BACKGROUND_SWEEPS = {
+    "sharded_sweep": (*TINY_SWEEP, "host_devices=2"),  # the tiny sweep on two forced host devices
+    "minimal_sweep": MINIMAL_SWEEP,
+}
+_background: dict[str, tuple[pathlib.Path, subprocess.Popen]] = {}
 
 
-def _start_sharded_sweep(out: pathlib.Path) -> subprocess.Popen:
-    return subprocess.Popen([sys.executable, "-m", "mjx_curio.sweep", *TINY_SWEEP, "host_devices=2", f"out={out}",
+def _start_background(name: str) -> None:
+    out = pathlib.Path(tempfile.mkdtemp(prefix=f"mjx_curio_{name}_")) / name
+    proc = subprocess.Popen([sys.executable, "-m", "mjx_curio.sweep", *BACKGROUND_SWEEPS[name], f"out={out}",
                              f"compile_cache={CACHE}"], stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True)
+    _background[name] = out, proc
+
+
+def _finished_background(name: str) -> pathlib.Path:
+    if name not in _background:  # collected without the hook seeing it (e.g. run by name from a plugin)
+        _start_background(name)
+    out, proc = _background[name]
+    _, err = proc.communicate(timeout=900)
+    if proc.returncode != 0:
+        raise AssertionError(f"{name} failed ({proc.returncode}):\n{err[-4000:]}")
+    return out
 
 
 def pytest_collection_finish(session):
@@ -154,28 +176,28 @@ def pytest_collection_finish(session):
         for item in session.items:
             if item.get_closest_marker("quick_only"):
                 item.add_marker(pytest.mark.skip(reason="the full suite's slow tests cover this in depth"))
-    if any(item.name == SHARDED_TEST for item in session.items):
-        out = pathlib.Path(tempfile.mkdtemp(prefix="mjx_curio_sharded_")) / "sharded"
-        _sharded.update(out=out, proc=_start_sharded_sweep(out))
+    if session.config.option.collectonly:
+        return
+    for name in BACKGROUND_SWEEPS:
+        if any(name in getattr(item, "fixturenames", ()) and not item.get_closest_marker("skip") for item in session.items):
+            _start_background(name)
 
 
 def pytest_sessionfinish(session, exitstatus):
-    proc = _sharded.get("proc")
-    if proc is not None and proc.poll() is None:
-        proc.kill()
-        proc.wait()
-    if "out" in _sharded and _sharded["out"].parent.name.startswith("mjx_curio_sharded_"):
-        shutil.rmtree(_sharded["out"].parent, ignore_errors=True)
+    for out, proc in _background.values():
+        if proc.poll() is None:
+            proc.kill()
+            proc.wait()
+        shutil.rmtree(out.parent, ignore_errors=True)
 
 
 @pytest.fixture(scope="session")
-def sharded_sweep(tmp_path_factory) -> pathlib.Path:
+def sharded_sweep() -> pathlib.Path:
     """The tiny sweep (TINY_SWEEP) run on two forced host devices, finished."""
-    if not _sharded:  # collected without the hook seeing it (e.g. run by name from a plugin)
-        out = tmp_path_factory.mktemp("sweeps_sharded") / "sharded"
-        _sharded.update(out=out, proc=_start_sharded_sweep(out))
-    proc = _sharded["proc"]
-    _, err = proc.communicate(timeout=900)
-    if proc.returncode != 0:
-        raise AssertionError(f"sharded sweep failed ({proc.returncode}):\n{err[-4000:]}")
-    return _sharded["out"]
+    return _finished_background("sharded_sweep")
+
+
+@pytest.fixture(scope="session")
+def minimal_sweep() -> pathlib.Path:
+    """MINIMAL_SWEEP, finished."""
+    return _finished_background("minimal_sweep")

@@ -12,7 +12,7 @@ import sys
 import numpy as np
 import pytest
 
-from conftest import sweep_in_process
+from conftest import MINIMAL_SWEEP, sweep_in_process
 from mjx_curio import config, dirlock, metrics, plan, progress, provenance
 from mjx_curio.config import ConfigError
 from mjx_curio import sweep as sweep_lib
@@ -129,19 +129,12 @@ def test_provenance_names_versions_cpu_and_commit():
 
 # ------------------------------------------------------------------------- one minimal sweep
 
-# The smallest sweep there is: one agent, 8 px, tiny networks, 40 steps. It runs every stage
-# (plan, lock, program, chunks, metrics, checkpoints, manifest) in under a minute.
-MINIMAL = ("agents=1", "policies=eps,ucb", "seeds=1", "image=8", "latent=4", "vae_channels=4,8", "dec_channels=4,4",
-           "rnn_hidden=8", "mixtures=2", "self_hidden=8", "batch=2", "seq_len=4", "buffer=40", "steps=40", "chunk=20",
-           "checkpoint_every=20", "keep_steps=20", "keep_every=0", "progress=false")
-
 
 @pytest.mark.quick_only
-def test_a_minimal_sweep_runs_every_stage_and_resumes_longer(tmp_path):
+def test_a_minimal_sweep_runs_every_stage_and_resumes_longer(minimal_sweep):
     from mjx_curio import checkpoint as ckpt_lib
 
-    out = tmp_path / "minimal"
-    sweep_in_process(*MINIMAL, f"out={out}")
+    out = minimal_sweep  # MINIMAL_SWEEP (tests/conftest.py), run in a background process
     manifest = json.loads((out / "manifest.json").read_text())
     assert set(manifest["config"]) == {k.name for k in sweep_lib.KEYS}
     assert manifest["run_config"]["learner"]["vae_channels"] == [4, 8] and manifest["device"]["count"] >= 1
@@ -153,7 +146,7 @@ def test_a_minimal_sweep_runs_every_stage_and_resumes_longer(tmp_path):
     ck = ckpt_lib.Checkpoints(out / "checkpoints", read_only=True)
     assert ck.latest_complete() == 40
     ck.close()
-    _, err = sweep_in_process(*[a for a in MINIMAL if a != "steps=40"], "steps=60", f"out={out}", "resume=true")
+    _, err = sweep_in_process(*[a for a in MINIMAL_SWEEP if a != "steps=40"], "steps=60", f"out={out}", "resume=true")
     assert "restored step 40" in err
     assert np.load(out / "metrics" / "curiosity.npy").shape == (2, 3, 1)
     assert np.isfinite(np.load(out / "metrics" / "curiosity.npy")).all()
