@@ -179,8 +179,14 @@ def pytest_collection_finish(session):
     if session.config.option.collectonly:
         return
     for name in BACKGROUND_SWEEPS:
-        if any(name in getattr(item, "fixturenames", ()) and not item.get_closest_marker("skip") for item in session.items):
+        if any(name in getattr(item, "fixturenames", ()) and not _skipped(item) for item in session.items):
             _start_background(name)
+
+
+def _skipped(item) -> bool:
+    """Whether `item` is marked to skip, unconditionally or by a true skipif condition (given as a bool)."""
+    return item.get_closest_marker("skip") is not None or any(
+        m.args and m.args[0] is True for m in item.iter_markers("skipif"))
 
 
 def pytest_sessionfinish(session, exitstatus):
