@@ -83,7 +83,7 @@ def tiny_sweep(tmp_path_factory) -> pathlib.Path:
 
 # The quick tier, `pytest -m "not slow"`: every test that needs one of the session's sweeps (each
 # compiles and runs a whole sweep program) is slow; other slow tests carry the mark themselves.
-SWEEP_FIXTURES = {"tiny_sweep", "tiny_single_sweep", "tiny_single_started", "tiny_sweeps_dir", "sharded_sweep"}
+SWEEP_FIXTURES = {"tiny_sweep", "tiny_single_sweep", "tiny_sweeps_dir", "sharded_sweep"}
 
 
 @pytest.hookimpl(tryfirst=True)  # before -m deselects by marker
@@ -91,46 +91,6 @@ def pytest_collection_modifyitems(config, items):
     for item in items:
         if SWEEP_FIXTURES & set(getattr(item, "fixturenames", ())):
             item.add_marker(pytest.mark.slow)
-
-
-# ------------------------------------------------------------------------------------------------
-# Analysis, notebook and video tests (test_analysis.py, test_notebook.py, test_video.py): a tiny
-# single-agent sweep too, made in a background process while `tiny_sweep` is made in this one
-# (two cores, two compiles), and a directory holding both, as the notebook reads them.
-
-TINY_SINGLE_SWEEP = ("agents=1", "policies=eps,ucb", "seeds=1", "steps=200", "image=16", "buffer=500", "chunk=100",
-                     "checkpoint_every=100", "keep_steps=100", "keep_every=0", "progress=false")
-
-
-@pytest.fixture(scope="session")
-def tiny_single_started(tmp_path_factory):
-    """Starts the tiny single-agent sweep in a background process; (out, process)."""
-    out = tmp_path_factory.mktemp("sweeps_single") / "tiny_single"
-    proc = subprocess.Popen([sys.executable, "-m", "mjx_curio.sweep", *TINY_SINGLE_SWEEP, f"out={out}",
-                             f"compile_cache={CACHE}"], stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True)
-    yield out, proc
-    if proc.poll() is None:
-        proc.kill()
-        proc.wait()
-
-
-@pytest.fixture(scope="session")
-def tiny_single_sweep(tiny_single_started) -> pathlib.Path:
-    """A finished tiny single-agent sweep: eps and ucb, one seed each, 200 steps, image 16."""
-    out, proc = tiny_single_started
-    _, err = proc.communicate(timeout=900)
-    if proc.returncode != 0:
-        raise AssertionError(f"single-agent sweep failed ({proc.returncode}):\n{err[-4000:]}")
-    return out
-
-
-@pytest.fixture(scope="session")
-def tiny_sweeps_dir(tmp_path_factory, tiny_single_started, tiny_sweep, tiny_single_sweep) -> pathlib.Path:
-    """A directory holding the two tiny sweeps (symlinks `multi` and `single`), as runs/paper holds the presets."""
-    parent = tmp_path_factory.mktemp("sweeps_parent")
-    (parent / "multi").symlink_to(tiny_sweep, target_is_directory=True)
-    (parent / "single").symlink_to(tiny_single_sweep, target_is_directory=True)
-    return parent
 
 
 # ------------------------------------------------------------------------------------------------
@@ -145,7 +105,13 @@ MINIMAL_SWEEP = ("agents=1", "policies=eps,ucb", "seeds=1", "image=8", "latent=4
                  "dec_channels=4,4", "rnn_hidden=8", "mixtures=2", "self_hidden=8", "batch=2", "seq_len=4", "buffer=40",
                  "steps=40", "chunk=20", "checkpoint_every=20", "keep_steps=20", "keep_every=0", "progress=false")
 
+# The analysis, notebook and video tests read a tiny single-agent sweep beside the tiny sweep (made in
+# this process), in one directory, as the notebook reads them.
+TINY_SINGLE_SWEEP = ("agents=1", "policies=eps,ucb", "seeds=1", "steps=200", "image=16", "buffer=500", "chunk=100",
+                     "checkpoint_every=100", "keep_steps=100", "keep_every=0", "progress=false")
+
 BACKGROUND_SWEEPS = {
+    "tiny_single_sweep": TINY_SINGLE_SWEEP,
     "sharded_sweep": (*TINY_SWEEP, "host_devices=2"),  # the tiny sweep on two forced host devices
     "minimal_sweep": MINIMAL_SWEEP,
 }
@@ -195,6 +161,21 @@ def pytest_sessionfinish(session, exitstatus):
             proc.kill()
             proc.wait()
         shutil.rmtree(out.parent, ignore_errors=True)
+
+
+@pytest.fixture(scope="session")
+def tiny_single_sweep() -> pathlib.Path:
+    """The tiny single-agent sweep (TINY_SINGLE_SWEEP: eps and ucb, one seed each), finished."""
+    return _finished_background("tiny_single_sweep")
+
+
+@pytest.fixture(scope="session")
+def tiny_sweeps_dir(tmp_path_factory, tiny_sweep, tiny_single_sweep) -> pathlib.Path:
+    """A directory holding the two tiny sweeps (symlinks `multi` and `single`), as runs/paper holds the presets."""
+    parent = tmp_path_factory.mktemp("sweeps_parent")
+    (parent / "multi").symlink_to(tiny_sweep, target_is_directory=True)
+    (parent / "single").symlink_to(tiny_single_sweep, target_is_directory=True)
+    return parent
 
 
 @pytest.fixture(scope="session")

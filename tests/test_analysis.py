@@ -23,7 +23,7 @@ from mjx_curio import analysis as an  # noqa: E402
 
 
 @pytest.fixture(scope="module")
-def sweep(tiny_single_started, tiny_sweep):  # starts the single-agent sweep in the background first
+def sweep(tiny_sweep):
     return an.load(tiny_sweep)
 
 
