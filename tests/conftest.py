@@ -10,6 +10,7 @@ import shutil
 import subprocess
 import sys
 import tempfile
+import threading
 
 import pytest
 
@@ -32,9 +33,17 @@ CACHE = pathlib.Path(os.environ.setdefault("JAX_COMPILATION_CACHE_DIR", tempfile
 # sharding tests ask for two devices explicitly (host_devices=2).
 os.environ["XLA_FLAGS"] = (os.environ.get("XLA_FLAGS", "") + " --xla_force_host_platform_device_count=1").strip()
 
+# The session's sweeps test the machinery (plan, program, chunks, metrics, checkpoints, resume,
+# sharding, analysis), not learning at the paper's sizes (tests/test_nets.py and
+# tests/test_world_model.py test that): with small networks and replay samples the many sweeps the
+# tests run cost a fraction of the paper-size learner's time (100 steps of the tiny sweep's 8 runs:
+# 17 s with the paper's sizes, under 3 s with these, on a 2-core Intel Xeon).
+SMALL_LEARNER = ("latent=8", "vae_channels=8,16,32,32", "dec_channels=32,16,8,8", "rnn_hidden=32", "mixtures=3",
+                 "self_hidden=32", "batch=4")
+
 # The tiny sweep: image 16, 2 seeds x (eps, boltzmann at T=0.5 and 1.5, ucb) = 8 runs, 200 steps, checkpoints at 100 and 200.
-TINY_SWEEP = ("seeds=2", "temperature=0.5,1.5", "steps=200", "image=16", "buffer=500", "chunk=100", "checkpoint_every=100",
-              "keep_steps=100", "keep_every=0", "progress=false")
+TINY_SWEEP = ("seeds=2", "temperature=0.5,1.5", "steps=200", "image=16", *SMALL_LEARNER, "buffer=500", "chunk=100",
+              "checkpoint_every=100", "keep_steps=100", "keep_every=0", "progress=false")
 
 
 def run_sweep(*args: str, env: dict | None = None, check: bool = True, timeout: float = 900) -> subprocess.CompletedProcess:
@@ -83,7 +92,7 @@ def tiny_sweep(tmp_path_factory) -> pathlib.Path:
 
 # The quick tier, `pytest -m "not slow"`: every test that needs one of the session's sweeps (each
 # compiles and runs a whole sweep program) is slow; other slow tests carry the mark themselves.
-SWEEP_FIXTURES = {"tiny_sweep", "tiny_single_sweep", "tiny_sweeps_dir", "sharded_sweep"}
+SWEEP_FIXTURES = {"tiny_sweep", "tiny_single_sweep", "tiny_sweeps_dir", "alone_sweep", "sharded_sweep"}
 
 
 @pytest.hookimpl(tryfirst=True)  # before -m deselects by marker
@@ -94,9 +103,10 @@ def pytest_collection_modifyitems(config, items):
 
 
 # ------------------------------------------------------------------------------------------------
-# Sweeps made in a background process, started as soon as collection shows that a test to be run
-# reads one: each is its own program (nothing in the cache to share), so it compiles on the second
-# core while the tests before it run on the first.
+# Sweeps made in background processes, one after another in the order the tests read them, from as
+# soon as collection shows which are needed: each is its own program (nothing in the cache to
+# share), so it compiles on the second core while the tests before it run on the first. One at a
+# time, because two beside the test process oversubscribe a 2-core machine (XLA's thread pools).
 
 # The smallest sweep there is: one agent, 8 px, tiny networks, 40 steps; it runs every stage (plan,
 # lock, program, chunks, metrics, checkpoints, manifest). Compiling it (mostly MJX's physics) is the
@@ -107,30 +117,51 @@ MINIMAL_SWEEP = ("agents=1", "policies=eps,ucb", "seeds=1", "image=8", "latent=4
 
 # The analysis, notebook and video tests read a tiny single-agent sweep beside the tiny sweep (made in
 # this process), in one directory, as the notebook reads them.
-TINY_SINGLE_SWEEP = ("agents=1", "policies=eps,ucb", "seeds=1", "steps=200", "image=16", "buffer=500", "chunk=100",
-                     "checkpoint_every=100", "keep_steps=100", "keep_every=0", "progress=false")
+TINY_SINGLE_SWEEP = ("agents=1", "policies=eps,ucb", "seeds=1", "steps=200", "image=16", *SMALL_LEARNER, "buffer=500",
+                     "chunk=100", "checkpoint_every=100", "keep_steps=100", "keep_every=0", "progress=false")
 
-BACKGROUND_SWEEPS = {
+# One run of the tiny sweep (UCB, seed 1) as a sweep of its own.
+ALONE_SWEEP = (*(a for a in TINY_SWEEP if not a.startswith(("seeds=", "temperature="))), "policies=ucb", "seeds=1",
+               "first_seed=1")
+
+BACKGROUND_SWEEPS = {  # in the order the test files read them
     "tiny_single_sweep": TINY_SINGLE_SWEEP,
-    "sharded_sweep": (*TINY_SWEEP, "host_devices=2"),  # the tiny sweep on two forced host devices
     "minimal_sweep": MINIMAL_SWEEP,
+    "alone_sweep": ALONE_SWEEP,
+    "sharded_sweep": (*TINY_SWEEP, "host_devices=2"),  # the tiny sweep on two forced host devices
 }
 _background: dict[str, tuple[pathlib.Path, subprocess.Popen]] = {}
+_background_lock = threading.Lock()
+_stopping = threading.Event()
 
 
 def _start_background(name: str) -> None:
+    """Start sweep `name` unless it has started (the caller holds _background_lock)."""
+    if name in _background:
+        return
     out = pathlib.Path(tempfile.mkdtemp(prefix=f"mjx_curio_{name}_")) / name
-    proc = subprocess.Popen([sys.executable, "-m", "mjx_curio.sweep", *BACKGROUND_SWEEPS[name], f"out={out}",
-                             f"compile_cache={CACHE}"], stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True)
+    with open(out.parent / "stderr.txt", "w") as err:  # a file, not a pipe: nothing blocks if nobody reads it yet
+        proc = subprocess.Popen([sys.executable, "-m", "mjx_curio.sweep", *BACKGROUND_SWEEPS[name], f"out={out}",
+                                 f"compile_cache={CACHE}"], stdout=subprocess.DEVNULL, stderr=err)
     _background[name] = out, proc
 
 
+def _run_in_turn(names: list[str]) -> None:
+    for name in names:
+        with _background_lock:
+            if _stopping.is_set():
+                return
+            _start_background(name)
+            proc = _background[name][1]
+        proc.wait()
+
+
 def _finished_background(name: str) -> pathlib.Path:
-    if name not in _background:  # collected without the hook seeing it (e.g. run by name from a plugin)
+    with _background_lock:  # a sweep read before its turn (e.g. a test run alone) starts now
         _start_background(name)
-    out, proc = _background[name]
-    _, err = proc.communicate(timeout=900)
-    if proc.returncode != 0:
+        out, proc = _background[name]
+    if proc.wait(timeout=900) != 0:
+        err = (out.parent / "stderr.txt").read_text()
         raise AssertionError(f"{name} failed ({proc.returncode}):\n{err[-4000:]}")
     return out
 
@@ -144,9 +175,9 @@ def pytest_collection_finish(session):
                 item.add_marker(pytest.mark.skip(reason="the full suite's slow tests cover this in depth"))
     if session.config.option.collectonly:
         return
-    for name in BACKGROUND_SWEEPS:
-        if any(name in getattr(item, "fixturenames", ()) and not _skipped(item) for item in session.items):
-            _start_background(name)
+    needed = [name for name in BACKGROUND_SWEEPS
+              if any(name in getattr(item, "fixturenames", ()) and not _skipped(item) for item in session.items)]
+    threading.Thread(target=_run_in_turn, args=(needed,), daemon=True).start()
 
 
 def _skipped(item) -> bool:
@@ -156,6 +187,8 @@ def _skipped(item) -> bool:
 
 
 def pytest_sessionfinish(session, exitstatus):
+    with _background_lock:
+        _stopping.set()
     for out, proc in _background.values():
         if proc.poll() is None:
             proc.kill()
@@ -188,3 +221,9 @@ def sharded_sweep() -> pathlib.Path:
 def minimal_sweep() -> pathlib.Path:
     """MINIMAL_SWEEP, finished."""
     return _finished_background("minimal_sweep")
+
+
+@pytest.fixture(scope="session")
+def alone_sweep() -> pathlib.Path:
+    """ALONE_SWEEP (one run of the tiny sweep on its own), finished."""
+    return _finished_background("alone_sweep")
