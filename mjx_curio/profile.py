@@ -46,6 +46,7 @@ import time
 import jax
 import jax.extend.core as jcore
 import jax.numpy as jnp
+import numpy as np
 import optax
 
 from mjx_curio import world_model as wm
@@ -209,8 +210,7 @@ def theoretical_peak() -> dict:
 
 def matmul_peak(n: int, repeats: int, dtype=jnp.float32) -> float:
     """Achievable GFLOP/s in `dtype`: the best of `repeats` n x n @ n x n matmuls after a warm-up."""
-    a = jax.random.normal(jax.random.key(1), (n, n), dtype)
-    b = jax.random.normal(jax.random.key(2), (n, n), dtype)
+    a, b = (jnp.asarray(x, dtype) for x in np.random.default_rng(1).standard_normal((2, n, n), np.float32))
     f = jax.jit(jnp.matmul).lower(a, b).compile()
     jax.block_until_ready(f(a, b))
     best = float("inf")
@@ -250,6 +250,9 @@ def profile(args: dict, time_fn) -> dict:
     n, b, t1 = lc.n_agents, lc.batch, lc.seq_len + 1
     key = jax.random.key(args["seed"])
     ks = jax.random.split(key, 10)
+    # The nets' inputs are drawn by NumPy: their values do not change the parts' speed, and each of
+    # JAX's random draws would compile a program first (seconds in all on a 2-core CPU).
+    rng = np.random.default_rng(args["seed"])
     rows: dict = {}
 
     def measure(name, fn, fn_args, per_step):
@@ -294,14 +297,26 @@ def profile(args: dict, time_fn) -> dict:
     else:  # a fresh run's pieces (no MJX step to compile); the nets' inputs random, their speed
         # does not depend on the values
         env = jax.jit(arena.reset)(ks[0]) if parts & {"physics", "rendering"} else None
-        learner = wm.init_learner(lc, ks[0])
-        frames = jax.random.randint(ks[1], (n, lc.image, lc.image, 3), 0, 256).astype(jnp.uint8)
-        z = jax.random.normal(ks[1], (n, lc.latent))
-        carry = wm.initial_carry(lc)
-        buffer = replay_lib.init_for(lc, rc.buffer)
+        # one program: run eagerly, each initialiser would compile its own
+        learner, carry, buffer = jax.jit(lambda k: (wm.init_learner(lc, k), wm.initial_carry(lc),
+                                                    replay_lib.init_for(lc, rc.buffer)))(ks[0])
+        frames = jnp.asarray(rng.integers(0, 256, (n, lc.image, lc.image, 3), np.uint8))
+        z = jnp.asarray(rng.standard_normal((n, lc.latent), np.float32))
+
+    shp = (b, t1, n)
+    batch = jax.tree.map(jnp.asarray, wm.Batch(
+        frames=rng.integers(0, 256, shp + (lc.image, lc.image, 3), np.uint8),
+        latents=rng.standard_normal(shp + (lc.latent,), np.float32),
+        actions=rng.integers(0, lc.n_actions, shp, np.int32),
+        carry=(np.zeros((b, t1, lc.rnn_hidden), np.float32),) * 2,
+    ))
+    actions = jnp.asarray(rng.integers(0, lc.n_actions, (n,), np.int32))
+    carry0 = (jnp.zeros((b, lc.rnn_hidden)),) * 2  # the sample's stored LSTM state at its start
+    # the re-encoding's frame per sequence whose posterior the VAE update computed, and that posterior
+    t_pick = jnp.asarray(rng.integers(0, t1, (b,), np.int32))
+    posterior = (jnp.zeros((b, n, lc.latent)),) * 2
 
     # --- acting, every step
-    actions = jax.random.randint(ks[2], (n,), 0, lc.n_actions)
     measure("physics", arena.step, (env, actions), 1.0)
     measure("rendering", arena.render, (env,), 1.0)
     measure("encoding", lambda p, f, k: wm.latent(lc, p, f, k), (learner.vae, frames, ks[3]), 1.0 + 1.0 / ue)
@@ -311,13 +326,6 @@ def profile(args: dict, time_fn) -> dict:
     # --- learning, every update_every steps, on a replay sample of the real shapes
     buffer = buffer._replace(size=jnp.asarray(buffer.capacity, jnp.int32))  # full: every start valid
     measure("replay_sample", lambda r, k: replay_lib.sample(r, k, b, lc.seq_len), (buffer, ks[4]), 1.0 / ue)
-    shp = (b, t1, n)
-    batch = wm.Batch(
-        frames=jax.random.randint(ks[5], shp + (lc.image, lc.image, 3), 0, 256).astype(jnp.uint8),
-        latents=jax.random.normal(ks[6], shp + (lc.latent,)),
-        actions=jax.random.randint(ks[7], shp, 0, lc.n_actions),
-        carry=(jnp.zeros((b, t1, lc.rnn_hidden)),) * 2,
-    )
 
     def adam(g, st, p):
         u, st = opt.update(g, st, p)
@@ -332,11 +340,8 @@ def profile(args: dict, time_fn) -> dict:
     measure("vae_update", vae_update, (learner.vae, learner.vae_opt, batch.frames, ks[8]), 1.0 / ue)
     # learner_update's re-encoding: the frames of the sample but the one per sequence and agent
     # whose posterior the VAE update just computed (world_model.reencoded_latents)
-    t_pick = jax.random.randint(ks[9], (b,), 0, t1)
-    posterior = (jnp.zeros((b, n, lc.latent)),) * 2
     measure("reencode", lambda p, f, t, q, k: wm.reencoded_latents(lc, p, f, t, q, k),
             (learner.vae, batch.frames, t_pick, posterior, ks[9]), 1.0 / ue if lc.latents == "reencode" else 0.0)
-    carry0 = jax.tree.map(lambda x: x[:, 0], batch.carry)
 
     def mdn_update(p, st, carry0, z, a):  # learner_update's MDN-RNN part (on the stored latents)
         (nll, (mix, h_in)), g = jax.value_and_grad(lambda p: wm.mdn_loss(lc, p, carry0, z, a), has_aux=True)(p)
