@@ -24,8 +24,15 @@ if "MUJOCO_GL" not in os.environ and ctypes.util.find_library("OSMesa"):
 
 # Compiling an MJX step takes ~30 s on a 2-core CPU, and the sweep tests start several
 # processes that compile the same programs: a persistent cache shared by every process of the
-# session (set before JAX initialises) makes each program compile once.
-CACHE = pathlib.Path(os.environ.setdefault("JAX_COMPILATION_CACHE_DIR", tempfile.mkdtemp(prefix="mjx_curio_xla_")))
+# session (set before JAX initialises) makes each program compile once. Kept between sessions in
+# the user's cache directory, it also spares the inner loop's next run (`pytest -m "not slow"`)
+# every compile whose program has not changed. Reuse is safe: JAX keys an entry by the program,
+# its compile options and the versions, and XLA's CPU loader refuses one compiled for CPU features
+# this machine lacks (it compiles anew). Capped at 2 GiB, least recently used entries dropped first.
+# JAX_COMPILATION_CACHE_DIR, if set, chooses another directory (a fresh one: a cold run, as CI's).
+CACHE = pathlib.Path(os.environ.setdefault("JAX_COMPILATION_CACHE_DIR", os.path.expanduser("~/.cache/mjx_curio/xla-tests")))
+CACHE.mkdir(parents=True, exist_ok=True)
+os.environ.setdefault("JAX_COMPILATION_CACHE_MAX_SIZE", str(2 << 30))
 
 # One CPU device for every JAX program of the session, in this process and in the sweeps it starts
 # (host_devices=auto honours a count set in XLA_FLAGS): the tests' reference results are one
