@@ -29,9 +29,23 @@ if "MUJOCO_GL" not in os.environ and ctypes.util.find_library("OSMesa"):
 # every compile whose program has not changed. Reuse is safe: JAX keys an entry by the program,
 # its compile options and the versions, and XLA's CPU loader refuses one compiled for CPU features
 # this machine lacks (it compiles anew). Capped at 2 GiB, least recently used entries dropped first.
-# JAX_COMPILATION_CACHE_DIR, if set, chooses another directory (a fresh one: a cold run, as CI's).
-CACHE = pathlib.Path(os.environ.setdefault("JAX_COMPILATION_CACHE_DIR", os.path.expanduser("~/.cache/mjx_curio/xla-tests")))
-CACHE.mkdir(parents=True, exist_ok=True)
+# JAX_COMPILATION_CACHE_DIR, if set, chooses another directory (a fresh one: a cold run, as CI's);
+# where the home directory is not writable, a temporary one serves this session and is removed.
+def _cache_dir() -> tuple[pathlib.Path, bool]:
+    """(the directory, whether it is a temporary one made here)"""
+    for path in (os.environ.get("JAX_COMPILATION_CACHE_DIR"), os.path.expanduser("~/.cache/mjx_curio/xla-tests")):
+        if path:
+            try:
+                pathlib.Path(path).mkdir(parents=True, exist_ok=True)
+                if os.access(path, os.W_OK):
+                    return pathlib.Path(path), False
+            except OSError:
+                pass
+    return pathlib.Path(tempfile.mkdtemp(prefix="mjx_curio_xla_")), True
+
+
+CACHE, _CACHE_IS_TEMPORARY = _cache_dir()
+os.environ["JAX_COMPILATION_CACHE_DIR"] = str(CACHE)
 os.environ.setdefault("JAX_COMPILATION_CACHE_MAX_SIZE", str(2 << 30))
 
 # One CPU device for every JAX program of the session, in this process and in the sweeps it starts
@@ -201,6 +215,8 @@ def pytest_sessionfinish(session, exitstatus):
             proc.kill()
             proc.wait()
         shutil.rmtree(out.parent, ignore_errors=True)
+    if _CACHE_IS_TEMPORARY:
+        shutil.rmtree(CACHE, ignore_errors=True)
 
 
 @pytest.fixture(scope="session")
