@@ -130,8 +130,8 @@ def pytest_collection_modifyitems(config, items):
 # time, because two beside the test process oversubscribe a 2-core machine (XLA's thread pools).
 
 # The smallest sweep there is: one agent, 8 px, tiny networks, 40 steps; it runs every stage (plan,
-# lock, program, chunks, metrics, checkpoints, manifest). Compiling it (mostly MJX's physics) is the
-# quick tier's longest wait.
+# lock, program, chunks, metrics, checkpoints, manifest). Compiling it (mostly MJX's physics, ~90 s of
+# CPU on a 2-core Intel Xeon) was the quick tier's longest wait while it ran in the test process.
 MINIMAL_SWEEP = ("agents=1", "policies=eps,ucb", "seeds=1", "image=8", "latent=4", "vae_channels=4,8",
                  "dec_channels=4,4", "rnn_hidden=8", "mixtures=2", "self_hidden=8", "batch=2", "seq_len=4", "buffer=40",
                  "steps=40", "chunk=20", "checkpoint_every=20", "keep_steps=20", "keep_every=0", "progress=false")
