@@ -54,6 +54,27 @@ os.environ.setdefault("JAX_COMPILATION_CACHE_MAX_SIZE", str(2 << 30))
 # sharding tests ask for two devices explicitly (host_devices=2).
 os.environ["XLA_FLAGS"] = (os.environ.get("XLA_FLAGS", "") + " --xla_force_host_platform_device_count=1").strip()
 
+# The quick tier's programs compile for compile speed: its tests compile far more than they run.
+# LLVM's optimisation off and XLA CPU's older fusion emitters (its MLIR ones are the default) took
+# the arena's MJX step from 19.3 s to 7.9 s of XLA compile on a 2-core Intel Xeon, and the quick
+# tier from 199 s to 94-130 s with a cold cache. Its tests compare with oracles within tolerances
+# or over horizons too short for rounding to grow, and pass under both codegens. The full suite
+# (the README's test command, CI's) compiles as users' runs do, with XLA's defaults: its tests of
+# long chaotic runs (a run alone and inside a sweep, bit for bit; the arena's long random rollout)
+# are about the programs users run. Under these flags a run alone and the same run in a sweep
+# were measured to differ in the last bit. A value set in XLA_FLAGS wins.
+QUICK_TIER_XLA_FLAGS = {"xla_backend_optimization_level": "0", "xla_cpu_use_fusion_emitters": "false"}
+
+
+def pytest_configure(config):
+    # Before collection imports the test modules, so before JAX starts: the flags still apply, in
+    # this process and in the sweeps it starts.
+    if "not slow" in (config.option.markexpr or ""):
+        for flag, value in QUICK_TIER_XLA_FLAGS.items():
+            if f"--{flag}=" not in os.environ["XLA_FLAGS"]:
+                os.environ["XLA_FLAGS"] += f" --{flag}={value}"
+
+
 # The session's sweeps test the machinery (plan, program, chunks, metrics, checkpoints, resume,
 # sharding, analysis), not learning at the paper's sizes (tests/test_nets.py and
 # tests/test_world_model.py test that): with small networks and replay samples the many sweeps the
@@ -145,22 +166,30 @@ TINY_SINGLE_SWEEP = ("agents=1", "policies=eps,ucb", "seeds=1", "steps=200", "im
 ALONE_SWEEP = (*(a for a in TINY_SWEEP if not a.startswith(("seeds=", "temperature="))), "policies=ucb", "seeds=1",
                "first_seed=1")
 
+# The minimal sweep resumed to 60 steps, in a copy of its directory (both are read).
+MINIMAL_SWEEP_RESUMED = (*(a for a in MINIMAL_SWEEP if a != "steps=40"), "steps=60", "resume=true")
+
 BACKGROUND_SWEEPS = {  # in the order the test files read them
     "tiny_single_sweep": TINY_SINGLE_SWEEP,
     "minimal_sweep": MINIMAL_SWEEP,
+    "minimal_sweep_resumed": MINIMAL_SWEEP_RESUMED,
     "alone_sweep": ALONE_SWEEP,
     "sharded_sweep": (*TINY_SWEEP, "host_devices=2"),  # the tiny sweep on two forced host devices
 }
+RESUMED_FROM = {"minimal_sweep_resumed": "minimal_sweep"}  # starts in a copy of the other, finished
 _background: dict[str, tuple[pathlib.Path, subprocess.Popen]] = {}
 _background_lock = threading.Lock()
 _stopping = threading.Event()
 
 
 def _start_background(name: str) -> None:
-    """Start sweep `name` unless it has started (the caller holds _background_lock)."""
+    """Start sweep `name` unless it has started (the caller holds _background_lock, and the sweep
+    it resumes, if any, has finished)."""
     if name in _background:
         return
     out = pathlib.Path(tempfile.mkdtemp(prefix=f"mjx_curio_{name}_")) / name
+    if name in RESUMED_FROM:
+        shutil.copytree(_background[RESUMED_FROM[name]][0], out)
     with open(out.parent / "stderr.txt", "w") as err:  # a file, not a pipe: nothing blocks if nobody reads it yet
         proc = subprocess.Popen([sys.executable, "-m", "mjx_curio.sweep", *BACKGROUND_SWEEPS[name], f"out={out}",
                                  f"compile_cache={CACHE}"], stdout=subprocess.DEVNULL, stderr=err)
@@ -169,6 +198,11 @@ def _start_background(name: str) -> None:
 
 def _run_in_turn(names: list[str]) -> None:
     for name in names:
+        if name in RESUMED_FROM:
+            try:
+                _finished_background(RESUMED_FROM[name])
+            except AssertionError:  # the test reading it says why
+                continue
         with _background_lock:
             if _stopping.is_set():
                 return
@@ -178,6 +212,8 @@ def _run_in_turn(names: list[str]) -> None:
 
 
 def _finished_background(name: str) -> pathlib.Path:
+    if name in RESUMED_FROM:
+        _finished_background(RESUMED_FROM[name])
     with _background_lock:  # a sweep read before its turn (e.g. a test run alone) starts now
         _start_background(name)
         out, proc = _background[name]
@@ -244,6 +280,13 @@ def sharded_sweep() -> pathlib.Path:
 def minimal_sweep() -> pathlib.Path:
     """MINIMAL_SWEEP, finished."""
     return _finished_background("minimal_sweep")
+
+
+@pytest.fixture(scope="session")
+def minimal_sweep_resumed() -> pathlib.Path:
+    """MINIMAL_SWEEP_RESUMED, finished: the minimal sweep's copy, resumed to 60 steps. Its
+    stderr is `stderr.txt` beside it."""
+    return _finished_background("minimal_sweep_resumed")
 
 
 @pytest.fixture(scope="session")

@@ -12,7 +12,6 @@ import sys
 import numpy as np
 import pytest
 
-from conftest import MINIMAL_SWEEP, sweep_in_process
 from mjx_curio import config, dirlock, metrics, plan, progress, provenance
 from mjx_curio.config import ConfigError
 from mjx_curio import sweep as sweep_lib
@@ -131,7 +130,7 @@ def test_provenance_names_versions_cpu_and_commit():
 
 
 @pytest.mark.quick_only
-def test_a_minimal_sweep_runs_every_stage_and_resumes_longer(minimal_sweep):
+def test_a_minimal_sweep_runs_every_stage_and_resumes_longer(minimal_sweep, minimal_sweep_resumed):
     from mjx_curio import checkpoint as ckpt_lib
 
     out = minimal_sweep  # MINIMAL_SWEEP (tests/conftest.py), run in a background process
@@ -146,11 +145,13 @@ def test_a_minimal_sweep_runs_every_stage_and_resumes_longer(minimal_sweep):
     ck = ckpt_lib.Checkpoints(out / "checkpoints", read_only=True)
     assert ck.latest_complete() == 40
     ck.close()
-    _, err = sweep_in_process(*[a for a in MINIMAL_SWEEP if a != "steps=40"], "steps=60", f"out={out}", "resume=true")
-    assert "restored step 40" in err
-    assert np.load(out / "metrics" / "curiosity.npy").shape == (2, 3, 1)
-    assert np.isfinite(np.load(out / "metrics" / "curiosity.npy")).all()
-    assert json.loads((out / "progress.json").read_text())["steps_done"] == 60
+    # Its copy, resumed with steps=60 in the background, went on from step 40.
+    resumed = minimal_sweep_resumed
+    assert "restored step 40" in (resumed.parent / "stderr.txt").read_text()
+    curiosity = np.load(resumed / "metrics" / "curiosity.npy")
+    assert curiosity.shape == (2, 3, 1) and np.isfinite(curiosity).all()
+    np.testing.assert_array_equal(curiosity[:, :2], m["curiosity"])
+    assert json.loads((resumed / "progress.json").read_text())["steps_done"] == 60
 
 
 def test_a_sweep_made_before_the_fidelity_settings_is_refused_by_resume_naming_them(tmp_path):
