@@ -554,11 +554,16 @@ def test_rollout_has_no_nan_and_nothing_leaves_the_room(rollout):
     # disc's rim or the pyramid's base, the blow tilts the object about its centre within one
     # step (the disc by 9 degrees), pushing its far edge 10-11 cm into the floor before the floor
     # throws it up again (friction 0.6; with 1.0 these trajectories went 5.5 cm deep at most).
-    # Falling through would keep an object down for many steps: no object may stay more than
-    # 5 cm in for over 0.5 s (measured: 5 of 12,000 steps for the disc, 2 for the pyramid, on an
-    # AMD EPYC without AVX-512; 12 for one object on one with it, where this chaotic rollout
-    # differs; at most 6 in a row).
-    tol, floor_tol = 0.05, 0.13
+    # How deep the deepest blow goes is an extreme of a chaotic rollout, which differs with the
+    # CPU and the compiler's rounding: 10-11 cm on an AMD EPYC; on a 2-core Intel Xeon 11.3 cm
+    # with XLA's default codegen, 12.9 cm and 18.4 cm (the pyramid) under two other XLA CPU
+    # codegens (older fusion emitters, with and without LLVM's optimisation). So the bound on one
+    # step's depth is loose (25 cm, more than half the pyramid's lower collision box), and what
+    # falling through would show is bounded tightly: an object kept down (no object may stay more
+    # than 5 cm in for over 0.5 s; measured at most 6 steps in a row) and deep steps being rare
+    # (at most 60 of an object's 12,000 steps more than 5 cm in; measured: 5 for the disc and 2
+    # for the pyramid on an AMD EPYC without AVX-512, 12 for one object with it, 0-14 here).
+    tol, floor_tol = 0.05, 0.25
     agents = q[..., arena.qpos_xy] + m.body_pos[arena.agent_bodies, :2]  # [w, t, n, 2]
     assert np.abs(agents).max() < WALL - 0.2 + tol, f"an agent's centre reached {np.abs(agents).max():.3f}"
     lowest = {}
@@ -581,6 +586,8 @@ def test_rollout_has_no_nan_and_nothing_leaves_the_room(rollout):
         lowest[name] = float(np.min(low))
         sunk = _longest_run(low.reshape(q.shape[:2]) < -0.05)
         assert sunk <= 30, f"{name} more than 5 cm into the floor for {sunk} steps in a row (over 0.5 s)"
+        deep = int(np.sum(low < -0.05))
+        assert deep <= 60, f"{name} more than 5 cm into the floor in {deep} of {low.size} steps"
     assert min(lowest.values()) > -floor_tol, f"lowest point of each object: {lowest}"
     # It was a real workout: the agents met objects, walls and each other.
     touches = rec["touch"].sum(axis=(0, 1))  # [agents, objects]
