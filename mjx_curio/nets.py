@@ -215,6 +215,29 @@ def upconv4x4_stride2(x, w):
     return depth_to_space(conv2x2(x, w))
 
 
+@jax.custom_vjp
+def add_bias(y, b):
+    """y + b, b broadcast over the last axis: a convolution's bias.
+
+    The same maths as `y + b`; only its gradient for b is computed differently. That gradient sums
+    dy over every axis but the channels, which XLA's CPU backend runs as a reduction over the
+    leading axes, slowly: 6.3 ms for a VAE update's first encoder layer (dy [32, 31, 31, 32]) on a
+    2-core Intel Xeon, against 1.2 ms as this matmul with a vector of ones (docs/cost_model.md)."""
+    return y + b
+
+
+def _add_bias_fwd(y, b):
+    return y + b, None
+
+
+def _add_bias_bwd(_, dy):
+    rows = dy.reshape(-1, dy.shape[-1])
+    return dy, (jnp.ones((1, rows.shape[0]), dy.dtype) @ rows)[0]
+
+
+add_bias.defvjp(_add_bias_fwd, _add_bias_bwd)
+
+
 class DownConv(nn.Module):
     """The paper's encoder layer: conv kernel 4, stride 2, VALID, + bias."""
 
@@ -224,7 +247,7 @@ class DownConv(nn.Module):
     def __call__(self, x):
         w = self.param("kernel", nn.initializers.lecun_normal(), (4, 4, x.shape[-1], self.features))
         b = self.param("bias", nn.initializers.zeros, (self.features,))
-        return conv4x4_stride2(x, w) + b
+        return add_bias(conv4x4_stride2(x, w), b)
 
 
 class UpConv(nn.Module):
@@ -237,7 +260,7 @@ class UpConv(nn.Module):
         w = self.param("kernel", nn.initializers.lecun_normal(), (2, 2, x.shape[-1], 4 * self.features))
         b = self.param("bias", nn.initializers.zeros, (4 * self.features,))
         # bias before depth-to-space: a per-(phase, channel) bias, as in the transposed conv
-        return depth_to_space(conv2x2(jnp.pad(x, ((0, 0), (0, 1), (0, 1), (0, 0))), w) + b)
+        return depth_to_space(add_bias(conv2x2(jnp.pad(x, ((0, 0), (0, 1), (0, 1), (0, 0))), w), b))
 
 
 # ----------------------------------------------------------------------------------------

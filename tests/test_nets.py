@@ -52,6 +52,34 @@ def test_conv2x2_custom_gradient_matches_autodiff():
         np.testing.assert_allclose(a, b, rtol=1e-4, atol=1e-3)
 
 
+@pytest.mark.parametrize("batched", ["none", "y", "y and b"])
+def test_add_bias_value_and_gradients_match_numpy(batched):
+    """add_bias's gradient for the bias (a matmul with ones) is dy summed over every axis but
+    the last, also under vmap: per-run biases get per-run sums, a shared bias the sum over runs."""
+    rng = np.random.default_rng(6)
+    r = 2
+    y = rng.standard_normal((r, 3, 5, 4, 6), np.float32)
+    b = rng.standard_normal((r, 6), np.float32)
+    dy = rng.standard_normal((r, 3, 5, 4, 6), np.float32)
+
+    def fwd_bwd(y, b, dy):
+        out, vjp = jax.vjp(nets.add_bias, y, b)
+        return (out,) + vjp(dy)
+
+    if batched == "none":
+        got = jax.jit(fwd_bwd)(y[0], b[0], dy[0])
+        want = (y[0] + b[0], dy[0], dy[0].astype(np.float64).sum((0, 1, 2)))
+    elif batched == "y":  # one bias shared by the runs: its cotangent sums over them too
+        out, vjp = jax.vjp(jax.vmap(nets.add_bias, in_axes=(0, None)), y, b[0])
+        got = (out,) + vjp(dy)
+        want = (y + b[0], dy, dy.astype(np.float64).sum((0, 1, 2, 3)))
+    else:
+        got = jax.jit(jax.vmap(fwd_bwd))(y, b, dy)
+        want = (y + b[:, None, None, None], dy, dy.astype(np.float64).sum((1, 2, 3)))
+    for name, a, w in zip(("value", "dy", "db"), got, want):
+        np.testing.assert_allclose(a, w, rtol=1e-5, atol=1e-5, err_msg=name)
+
+
 def test_conv2x2_matmul_forms_match_lax_references():
     """The matmul forms conv2x2 takes under vmap with per-run kernels (`nets._by_kernel`)
     against lax: im2col times the kernel is the VALID convolution, and the input gradient's
