@@ -214,6 +214,29 @@ def test_an_interrupted_sweep_checkpoints_says_how_to_resume_and_resumes_exactly
     _assert_same_tree(_state(out, 300), _state(straight, 300), "final checkpoint")
 
 
+def test_a_chunk_compiled_ahead_of_time_is_the_jitted_chunk(tiny_sweep, tmp_path):
+    """SweepProgram.compile (what `python -m mjx_curio.bench what=sweep` times as compiling) runs
+    the program chunk() runs through jit: from the same start, bit for bit the same states and
+    metrics. The tiny sweep compiled that program in this process already (tiny_sweep first)."""
+    import dataclasses
+
+    from mjx_curio import cli
+    from mjx_curio import plan as plan_lib
+    from mjx_curio.program import SweepProgram
+
+    p = plan_lib.plan(cli.parse([*TINY_SWEEP, f"out={tmp_path / 'unused'}"], sweep_lib.KEYS))
+    cfg = dataclasses.replace(p.run, runs_loop="map")  # what the sweep picks on a CPU
+    n_pad = -len(p.runs) % len(jax.devices())
+    jitted, ahead = (SweepProgram(cfg, p.runs, n_pad, p.values["chunk"]) for _ in range(2))
+    start = ahead.init()
+    ahead.compile(start)
+    got = ahead.chunk(start)  # the chunk donates its input: each program starts from its own init
+    want = jitted.chunk(jitted.init())
+    plain = lambda tree: jax.tree.map(  # noqa: E731  (PRNG keys as their raw data)
+        lambda x: jax.random.key_data(x) if jax.dtypes.issubdtype(x.dtype, jax.dtypes.prng_key) else x, tree)
+    _assert_same_tree(plain(got), plain(want), "a chunk compiled ahead of time vs the jitted one")
+
+
 def test_sharding_gives_every_device_its_own_runs_with_their_own_keys(tiny_sweep, sharded_sweep):
     """TINY_SWEEP on two forced host devices (conftest.py) against the same sweep on one.
 
