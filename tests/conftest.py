@@ -7,10 +7,12 @@ import io
 import os
 import pathlib
 import shutil
+import signal
 import subprocess
 import sys
 import tempfile
 import threading
+import time
 
 import pytest
 
@@ -88,17 +90,6 @@ TINY_SWEEP = ("seeds=2", "temperature=0.5,1.5", "steps=200", "image=16", *SMALL_
               "checkpoint_every=100", "keep_steps=100", "keep_every=0", "progress=false")
 
 
-def run_sweep(*args: str, env: dict | None = None, check: bool = True, timeout: float = 900) -> subprocess.CompletedProcess:
-    """`python -m mjx_curio.sweep *args` in a subprocess sharing the session's compile cache.
-    For what needs its own process: a kill, a crash, another device count."""
-    full_env = dict(os.environ, **(env or {}))
-    proc = subprocess.run([sys.executable, "-m", "mjx_curio.sweep", *args, f"compile_cache={CACHE}"],
-                          capture_output=True, text=True, env=full_env, timeout=timeout)
-    if check and proc.returncode != 0:
-        raise AssertionError(f"sweep {' '.join(args)} failed ({proc.returncode}):\n{proc.stderr[-4000:]}")
-    return proc
-
-
 def sweep_in_process(*args: str, env: dict | None = None, check: bool = True) -> tuple[int, str]:
     """The same sweep run inside the test process: (exit status, stderr). Sweeps with one
     program share its trace and executable here (tracing alone costs ~20 s a process)."""
@@ -134,7 +125,8 @@ def tiny_sweep(tmp_path_factory) -> pathlib.Path:
 
 # The quick tier, `pytest -m "not slow"`: every test that needs one of the session's sweeps (each
 # compiles and runs a whole sweep program) is slow; other slow tests carry the mark themselves.
-SWEEP_FIXTURES = {"tiny_sweep", "tiny_single_sweep", "tiny_sweeps_dir", "alone_sweep", "sharded_sweep"}
+SWEEP_FIXTURES = {"tiny_sweep", "tiny_single_sweep", "tiny_sweeps_dir", "alone_sweep", "sharded_sweep", "crashed_sweep",
+                  "interrupted_sweep"}
 
 
 @pytest.hookimpl(tryfirst=True)  # before -m deselects by marker
@@ -169,14 +161,30 @@ ALONE_SWEEP = (*(a for a in TINY_SWEEP if not a.startswith(("seeds=", "temperatu
 # The minimal sweep resumed to 60 steps, in a copy of its directory (both are read).
 MINIMAL_SWEEP_RESUMED = (*(a for a in MINIMAL_SWEEP if a != "steps=40"), "steps=60", "resume=true")
 
+# The tiny sweep planned for 300 steps, checkpointing only at its end, its progress on stderr: sent a
+# signal once its first chunk is done, so that the signal arrives during the second.
+INTERRUPTED_SWEEP = (*(a for a in TINY_SWEEP if not a.startswith(("steps=", "checkpoint_every=", "keep_steps=", "progress="))),
+                     "steps=300", "checkpoint_every=300", "keep_steps=300", "progress=true")
+
 BACKGROUND_SWEEPS = {  # in the order the test files read them
     "tiny_single_sweep": TINY_SINGLE_SWEEP,
     "minimal_sweep": MINIMAL_SWEEP,
     "minimal_sweep_resumed": MINIMAL_SWEEP_RESUMED,
     "alone_sweep": ALONE_SWEEP,
+    "crashed_sweep": TINY_SWEEP,  # killed inside its step-200 checkpoint write (STOPPED_BY)
+    "sigint_sweep": INTERRUPTED_SWEEP,
+    "sigterm_sweep": INTERRUPTED_SWEEP,
     "sharded_sweep": (*TINY_SWEEP, "host_devices=2"),  # the tiny sweep on two forced host devices
 }
 RESUMED_FROM = {"minimal_sweep_resumed": "minimal_sweep"}  # starts in a copy of the other, finished
+# The sweeps stopped before their end, for the tests of stopping and resuming: their subprocesses
+# (~35 s each, mostly tracing on one core) run here, on the core the test process leaves idle.
+# sweep: (extra environment, the signal it is sent, the stderr text after which it is sent)
+STOPPED_BY = {
+    "crashed_sweep": ({"MJX_CURIO_CRASH_AT": "after-state:200"}, None, None),  # checkpoint.CRASH_ENV
+    "sigint_sweep": ({}, signal.SIGINT, "step 100/300"),
+    "sigterm_sweep": ({}, signal.SIGTERM, "step 100/300"),
+}
 _background: dict[str, tuple[pathlib.Path, subprocess.Popen]] = {}
 _background_lock = threading.Lock()
 _stopping = threading.Event()
@@ -190,10 +198,24 @@ def _start_background(name: str) -> None:
     out = pathlib.Path(tempfile.mkdtemp(prefix=f"mjx_curio_{name}_")) / name
     if name in RESUMED_FROM:
         shutil.copytree(_background[RESUMED_FROM[name]][0], out)
-    with open(out.parent / "stderr.txt", "w") as err:  # a file, not a pipe: nothing blocks if nobody reads it yet
+    env, signum, after = STOPPED_BY.get(name, ({}, None, None))
+    stderr = out.parent / "stderr.txt"
+    with open(stderr, "w") as err:  # a file, not a pipe: nothing blocks if nobody reads it yet
         proc = subprocess.Popen([sys.executable, "-m", "mjx_curio.sweep", *BACKGROUND_SWEEPS[name], f"out={out}",
-                                 f"compile_cache={CACHE}"], stdout=subprocess.DEVNULL, stderr=err)
+                                 f"compile_cache={CACHE}"], stdout=subprocess.DEVNULL, stderr=err,
+                                env=dict(os.environ, **env))
     _background[name] = out, proc
+    if signum is not None:
+        threading.Thread(target=_signal_after, args=(proc, stderr, after, signum), daemon=True).start()
+
+
+def _signal_after(proc: subprocess.Popen, stderr: pathlib.Path, text: str, signum: int) -> None:
+    """Send `signum` to `proc` as soon as `text` shows in its stderr."""
+    while proc.poll() is None:
+        if text in stderr.read_text(errors="replace"):
+            proc.send_signal(signum)
+            return
+        time.sleep(0.05)
 
 
 def _run_in_turn(names: list[str]) -> None:
@@ -211,15 +233,21 @@ def _run_in_turn(names: list[str]) -> None:
         proc.wait()
 
 
-def _finished_background(name: str) -> pathlib.Path:
+def _ended_background(name: str) -> tuple[pathlib.Path, int, str]:
+    """(directory, exit status, stderr) of background sweep `name`, once it has ended."""
     if name in RESUMED_FROM:
         _finished_background(RESUMED_FROM[name])
     with _background_lock:  # a sweep read before its turn (e.g. a test run alone) starts now
         _start_background(name)
         out, proc = _background[name]
-    if proc.wait(timeout=900) != 0:
-        err = (out.parent / "stderr.txt").read_text()
-        raise AssertionError(f"{name} failed ({proc.returncode}):\n{err[-4000:]}")
+    proc.wait(timeout=900)
+    return out, proc.returncode, (out.parent / "stderr.txt").read_text()
+
+
+def _finished_background(name: str) -> pathlib.Path:
+    out, returncode, err = _ended_background(name)
+    if returncode != 0:
+        raise AssertionError(f"{name} failed ({returncode}):\n{err[-4000:]}")
     return out
 
 
@@ -233,8 +261,16 @@ def pytest_collection_finish(session):
     if session.config.option.collectonly:
         return
     needed = [name for name in BACKGROUND_SWEEPS
-              if any(name in getattr(item, "fixturenames", ()) and not _skipped(item) for item in session.items)]
+              if any(name in _sweeps_read(item) and not _skipped(item) for item in session.items)]
     threading.Thread(target=_run_in_turn, args=(needed,), daemon=True).start()
+
+
+def _sweeps_read(item) -> set:
+    """The session's sweeps `item` reads: its fixtures, and the sweep a parametrized fixture
+    (interrupted_sweep) is given by name."""
+    callspec = getattr(item, "callspec", None)
+    params = {v for v in callspec.params.values() if isinstance(v, str)} if callspec else set()
+    return set(getattr(item, "fixturenames", ())) | params
 
 
 def _skipped(item) -> bool:
@@ -293,3 +329,17 @@ def minimal_sweep_resumed() -> pathlib.Path:
 def alone_sweep() -> pathlib.Path:
     """ALONE_SWEEP (one run of the tiny sweep on its own), finished."""
     return _finished_background("alone_sweep")
+
+
+@pytest.fixture(scope="session")
+def crashed_sweep() -> tuple[pathlib.Path, int, str]:
+    """The tiny sweep killed inside its step-200 checkpoint write (STOPPED_BY): (directory, exit
+    status, stderr)."""
+    return _ended_background("crashed_sweep")
+
+
+@pytest.fixture(scope="session")
+def interrupted_sweep(request) -> tuple[int, pathlib.Path, int, str]:
+    """INTERRUPTED_SWEEP sent the signal of `request.param` ("sigint_sweep" or "sigterm_sweep")
+    during its second chunk: (the signal, directory, exit status, stderr)."""
+    return (STOPPED_BY[request.param][1], *_ended_background(request.param))

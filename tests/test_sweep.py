@@ -10,7 +10,6 @@ float rounding may differ in the last bit; that test compares only what cannot h
 import mjx_curio  # noqa: F401  (XLA flags before JAX initialises)
 
 import json
-import os
 import shutil
 import signal
 import subprocess
@@ -21,7 +20,7 @@ import jax
 import numpy as np
 import pytest
 
-from conftest import CACHE, TINY_SWEEP, run_sweep, sweep_in_process
+from conftest import CACHE, STOPPED_BY, TINY_SWEEP, sweep_in_process
 from mjx_curio import analysis as an
 from mjx_curio import checkpoint as ckpt_lib
 from mjx_curio import sweep as sweep_lib
@@ -137,10 +136,10 @@ def test_a_second_writer_is_refused_and_resume_after_sigkill_equals_the_run_that
     _assert_same_tree(_state(out, 200), _state(tiny_sweep, 200), "final checkpoint, resumed vs straight")
 
 
-def test_killed_while_writing_a_checkpoint_resumes_from_the_previous_one(tiny_sweep, tmp_path):
-    out = tmp_path / "crashed"
-    crashed = run_sweep(*TINY_SWEEP, f"out={out}", env={ckpt_lib.CRASH_ENV: "after-state:200"}, check=False)
-    assert crashed.returncode == -signal.SIGKILL, crashed.stderr[-2000:]
+def test_killed_while_writing_a_checkpoint_resumes_from_the_previous_one(tiny_sweep, crashed_sweep):
+    out, returncode, stderr = crashed_sweep  # the tiny sweep, its crash hook set to kill it (conftest.py)
+    assert STOPPED_BY["crashed_sweep"][0] == {ckpt_lib.CRASH_ENV: "after-state:200"}
+    assert returncode == -signal.SIGKILL, stderr[-2000:]
     ckdir = out / "checkpoints"
     assert (ckdir / "state" / "200").exists() and not (ckdir / "replay" / "200").exists()
     # What orbax leaves when killed inside a write: a temporary directory, never a step directory.
@@ -156,27 +155,11 @@ def test_killed_while_writing_a_checkpoint_resumes_from_the_previous_one(tiny_sw
     _assert_same_tree(_state(out, 200), _state(tiny_sweep, 200), "final checkpoint")
 
 
-def _interrupt(out, signum, steps=300):
-    """TINY_SWEEP planned for `steps` steps in a subprocess, sent `signum` once its first chunk
-    is done (so it arrives during the second): (exit status, stderr)."""
-    args = [a for a in TINY_SWEEP if not a.startswith(("steps=", "checkpoint_every=", "keep_steps=", "progress="))]
-    cmd = [sys.executable, "-m", "mjx_curio.sweep", *args, f"steps={steps}", f"checkpoint_every={steps}",
-           f"keep_steps={steps}", "progress=true", f"out={out}", f"compile_cache={CACHE}"]
-    proc = subprocess.Popen(cmd, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True)
-    lines = []
-    for line in proc.stderr:
-        lines.append(line)
-        if f"step 100/{steps}" in line:
-            proc.send_signal(signum)
-            break
-    _, rest = proc.communicate(timeout=600)
-    return proc.returncode, "".join(lines) + rest
-
-
-@pytest.mark.parametrize("signum", [signal.SIGINT, signal.SIGTERM], ids=["ctrl-c", "sigterm"])
-def test_an_interrupted_sweep_checkpoints_says_how_to_resume_and_resumes_exactly(signum, tiny_sweep, tmp_path):
-    out = tmp_path / "interrupted"
-    rc, stderr = _interrupt(out, signum)
+@pytest.mark.parametrize("interrupted_sweep", ["sigint_sweep", "sigterm_sweep"], ids=["ctrl-c", "sigterm"], indirect=True)
+def test_an_interrupted_sweep_checkpoints_says_how_to_resume_and_resumes_exactly(interrupted_sweep, tiny_sweep, tmp_path):
+    # The tiny sweep planned for 300 steps in a subprocess, sent the signal once its first chunk is
+    # done, so that it arrives during the second (conftest.py).
+    signum, out, rc, stderr = interrupted_sweep
     assert rc == 128 + signum, stderr[-3000:]
     assert "Traceback" not in stderr, stderr[-3000:]
     name = signal.Signals(signum).name
