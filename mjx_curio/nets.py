@@ -309,11 +309,22 @@ class VAE(nn.Module):
 
     def encode(self, frames):
         """frames uint8 (or float in [0,1]) [B,H,W,3] -> (mu, logvar), each [B,latent]."""
-        x = frames.astype(jnp.float32)
-        if jnp.issubdtype(frames.dtype, jnp.integer):
-            x = x * (1.0 / 255.0)
-        for layer in self.down:
-            x = nn.relu(layer(x))
+        x = frames
+        for stage in range(self.n_layers + 1):
+            x = self.encode_stage(stage, x)
+        return x
+
+    def encode_stage(self, stage: int, x):
+        """One stage of `encode`, which runs them in turn: stage i < n_layers is the i-th
+        convolution and its ReLU (the first also scales uint8 frames to [0, 1]), stage n_layers the
+        mean and log-variance head. Apart so that the profile can time each layer alone."""
+        if stage == 0:
+            dtype = x.dtype
+            x = x.astype(jnp.float32)
+            if jnp.issubdtype(dtype, jnp.integer):
+                x = x * (1.0 / 255.0)
+        if stage < self.n_layers:
+            return nn.relu(self.down[stage](x))
         out = self.heads(x.reshape(x.shape[0], -1))
         return out[:, : self.latent], out[:, self.latent :]
 

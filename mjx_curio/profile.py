@@ -10,6 +10,9 @@ its components, each a separately jitted function on the real shapes:
     learning, every           replay sampling (replay.sample), VAE update, MDN-RNN BPTT,
     update_every steps        self-model update (each forward + backward + Adam, the same maths
                               as learner_update's part), re-encoding (latents=reencode only)
+    re-encoding's layers      its encoder pass stage by stage (nets.VAE.encode_stage): each
+                              convolution, then the head, each alone on the stage before's
+                              output; shown under re-encoding, not added to the sum
     for reference             the whole learner_update, and a whole run-step: the sweep's own
                               compiled program (program.SweepProgram) on one run, a chunk of
                               update_every steps, divided by update_every
@@ -42,6 +45,7 @@ import os
 import re
 import subprocess
 import time
+from functools import partial
 
 import jax
 import jax.extend.core as jcore
@@ -49,10 +53,11 @@ import jax.numpy as jnp
 import numpy as np
 import optax
 
+from mjx_curio import nets
 from mjx_curio import world_model as wm
 
 # (name, when it runs) in table order; "act": every step, "learn": every update_every steps,
-# "ref": a whole for reference.
+# "detail": a part's pieces, each timed alone (not summed), "ref": a whole for reference.
 COMPONENTS = (
     ("physics", "act"),
     ("rendering", "act"),
@@ -64,6 +69,7 @@ COMPONENTS = (
     ("mdn_rnn_bptt", "learn"),
     ("self_model_update", "learn"),
     ("reencode", "learn"),
+    ("reencode_layers", "detail"),
     ("learner_update", "ref"),
     ("run_step", "ref"),
 )
@@ -255,16 +261,18 @@ def profile(args: dict, time_fn) -> dict:
     rng = np.random.default_rng(args["seed"])
     rows: dict = {}
 
-    def measure(name, fn, fn_args, per_step):
-        if name not in parts:
-            return
+    def timed(fn, fn_args, per_step) -> dict:
         t0, c0 = time.perf_counter(), time.process_time()
         traced = jax.jit(fn).trace(*fn_args)
         compiled = traced.lower().compile()
         compile_s, compile_cpu_s = time.perf_counter() - t0, time.process_time() - c0
         _, best = time_fn(compiled, fn_args, iters, repeats)
-        rows[name] = {"ms_per_call": best * 1e3, "calls_per_run_step": per_step, "compile_s": round(compile_s, 2),
-                      "compile_cpu_s": round(compile_cpu_s, 2), **counts(compiled, traced.jaxpr.jaxpr)}
+        return {"ms_per_call": best * 1e3, "calls_per_run_step": per_step, "compile_s": round(compile_s, 2),
+                "compile_cpu_s": round(compile_cpu_s, 2), **counts(compiled, traced.jaxpr.jaxpr)}
+
+    def measure(name, fn, fn_args, per_step):
+        if name in parts:
+            rows[name] = timed(fn, fn_args, per_step)
 
     if "run_step" in parts:
         # The whole run-step: the sweep's own program on one run, a chunk = one update period.
@@ -340,8 +348,17 @@ def profile(args: dict, time_fn) -> dict:
     measure("vae_update", vae_update, (learner.vae, learner.vae_opt, batch.frames, ks[8]), 1.0 / ue)
     # learner_update's re-encoding: the frames of the sample but the one per sequence and agent
     # whose posterior the VAE update just computed (world_model.reencoded_latents)
+    reencode_per_step = 1.0 / ue if lc.latents == "reencode" else 0.0
     measure("reencode", lambda p, f, t, q, k: wm.reencoded_latents(lc, p, f, t, q, k),
-            (learner.vae, batch.frames, t_pick, posterior, ks[9]), 1.0 / ue if lc.latents == "reencode" else 0.0)
+            (learner.vae, batch.frames, t_pick, posterior, ks[9]), reencode_per_step)
+    layers: dict = {}
+    if "reencode_layers" in parts:
+        # the re-encoding's encoder pass stage by stage, each on the previous stage's output
+        x = batch.frames[:, 1:].reshape((-1,) + batch.frames.shape[3:])  # B x T x n_agents frames
+        for stage, name in enumerate(encoder_stage_names(lc)):
+            fn = partial(encoder_stage, lc, stage)
+            layers[name] = timed(fn, (learner.vae, x), reencode_per_step)
+            x = jax.jit(fn)(learner.vae, x)
 
     def mdn_update(p, st, carry0, z, a):  # learner_update's MDN-RNN part (on the stored latents)
         (nll, (mix, h_in)), g = jax.value_and_grad(lambda p: wm.mdn_loss(lc, p, carry0, z, a), has_aux=True)(p)
@@ -374,12 +391,12 @@ def profile(args: dict, time_fn) -> dict:
     peak_bf16 = matmul_peak(args["peak_n"], repeats, jnp.bfloat16)
     theory = theoretical_peak()
     names = [name for name, _ in COMPONENTS if name in rows]
-    summed = [name for name, when in COMPONENTS if when != "ref" and name in rows]
-    for row in rows.values():
+    summed = [name for name, when in COMPONENTS if when in ("act", "learn") and name in rows]
+    for row in (*rows.values(), *layers.values()):
         row["ms_per_run_step"] = row["ms_per_call"] * row["calls_per_run_step"]
     sum_ms = sum(rows[p]["ms_per_run_step"] for p in summed)
     whole_ms = rows["run_step"]["ms_per_run_step"] if "run_step" in rows else None
-    for row in rows.values():
+    for row in (*rows.values(), *layers.values()):
         row["share_pct"] = 100.0 * row["ms_per_run_step"] / (whole_ms or sum_ms or 1.0)
         row["gflops_per_s"] = row["flops"] / (row["ms_per_call"] * 1e6)
         row["pct_of_peak"] = 100.0 * row["gflops_per_s"] / peak
@@ -405,9 +422,26 @@ def profile(args: dict, time_fn) -> dict:
         **theory,
         "run_step_ms": None if whole_ms is None else round(whole_ms, 3),
         "sum_of_parts_ms": round(sum_ms, 3),
-        "components": {name: {k: (round(v, 6) if isinstance(v, float) else v) for k, v in rows[name].items()}
-                       for name in names},
+        "components": {name: _rounded(rows[name]) for name in names},
+        "reencode_layers": {name: _rounded(row) for name, row in layers.items()},
     }
+
+
+def _rounded(row: dict) -> dict:
+    return {k: (round(v, 6) if isinstance(v, float) else v) for k, v in row.items()}
+
+
+def encoder_stage_names(lc) -> list[str]:
+    """The encoder's stages (nets.VAE.encode_stage) as the profile names them, with each output's
+    shape: conv1_31x31x32 ... at 64 x 64, then the mean and log-variance head."""
+    sizes = nets.encoder_sizes(lc.image, len(lc.vae_channels))
+    return [f"conv{i + 1}_{s}x{s}x{c}" for i, (s, c) in enumerate(zip(sizes, lc.vae_channels))] + ["head"]
+
+
+def encoder_stage(lc, stage: int, vae_params, x):
+    """Stage `stage` of the encoder on a batch x (uint8 frames for stage 0, else the stage before's
+    output)."""
+    return wm.make_nets(lc).vae.apply({"params": vae_params}, stage, x, method=nets.VAE.encode_stage)
 
 
 def table(result: dict) -> str:
@@ -425,8 +459,11 @@ def table(result: dict) -> str:
                      f"{row['xla_bytes'] / 1e6:>9.2f}{row['gflops_per_s']:>9.2f}{row['pct_of_peak']:>7.1f}")
 
     for name, when in COMPONENTS:
-        if when != "ref" and name in comps:
+        if when in ("act", "learn") and name in comps:
             line(name, comps[name])
+        if name == "reencode_layers":  # after reencode: its encoder pass stage by stage, not summed
+            for stage, row in result.get("reencode_layers", {}).items():
+                line(f"  {stage}", row)
     lines.append(rule)
     whole = result["run_step_ms"]
     share = f"{100 * result['sum_of_parts_ms'] / whole:>8.1f}" if whole else ""
@@ -441,6 +478,9 @@ def table(result: dict) -> str:
         " current view); reencode counts only with latents=reencode. run-step (whole): one call is a chunk of"
         " update_every steps of the sweep's own program.",
         "share%: of the whole run-step (of the sum of the parts when run_step is not profiled).",
+        "Indented under reencode (parts=reencode_layers): the re-encoding's encoder pass, one program per"
+        " convolution (with its ReLU; the first also scales the frames) and the head, each on the stage before's"
+        " output; timed alone, not in the sum.",
         "GFLOP/call: XLA's cost analysis, plus the matmul/conv FLOPs of the scan iterations it leaves out (it"
         " counts a loop body once): * = corrected so; ~ = also holds a while_loop of unknown trip count (MJX's"
         " solver), counted once: a lower bound. MB/call: XLA's bytes accessed (loop bodies once).",

@@ -71,7 +71,7 @@ def test_bad_parts_is_refused_naming_the_key(capsys):
     assert "parts" in err and "warp" in err and "encoding" in err
 
 
-LEARNER_PARTS = "replay_sample,vae_update,mdn_rnn_bptt,self_model_update,reencode"
+LEARNER_PARTS = "replay_sample,vae_update,mdn_rnn_bptt,self_model_update,reencode,reencode_layers"
 
 
 @pytest.mark.slow
@@ -82,12 +82,26 @@ def test_every_learner_component_at_tiny_sizes(capsys):
     check those programs already."""
     result = bench.main(["what=profile", f"parts={LEARNER_PARTS}", *TINY])
     names = LEARNER_PARTS.split(",")
-    assert list(result["components"]) == [name for name, _ in profile.COMPONENTS if name in names]
+    assert list(result["components"]) == [name for name, when in profile.COMPONENTS
+                                          if name in names and when != "detail"]
     comps = result["components"]
     for name, row in comps.items():
         assert row["ms_per_call"] > 0 and (row["flops"] > 0 or name == "replay_sample"), name
     assert comps["mdn_rnn_bptt"]["scan_extra_flops"] > 0  # the BPTT time loop
     assert comps["reencode"]["calls_per_run_step"] == 0.25  # latents=reencode, an update every 4 steps
     # re-encoding: the encoder on B x T x n_agents = 2 x 4 x 2 = 16 frames
-    assert comps["reencode"]["flops"] == pytest.approx(16 * _encoder_flops(LearnerConfig(image=16)), rel=0.05)
-    assert "vae_update" in capsys.readouterr().out
+    lc = LearnerConfig(image=16)
+    assert comps["reencode"]["flops"] == pytest.approx(16 * _encoder_flops(lc), rel=0.05)
+    # ... and stage by stage: each convolution against its hand count, the head's matmul
+    layers = result["reencode_layers"]
+    assert list(layers) == ["conv1_7x7x32", "conv2_2x2x64", "head"]
+    sizes, chans = nets.encoder_sizes(16, 4), (3, 32, 64)
+    for i, (name, row) in enumerate(list(layers.items())[:2]):
+        hand = 16 * 2 * sizes[i] ** 2 * 4 * 4 * chans[i] * chans[i + 1]
+        assert hand <= row["flops"] <= 1.05 * hand, name  # the rest: bias, ReLU (and scaling)
+        assert row["calls_per_run_step"] == 0.25
+    head = 16 * 2 * sizes[-1] ** 2 * chans[-1] * 2 * lc.latent
+    assert head <= layers["head"]["flops"] <= 1.05 * head
+    assert sum(row["flops"] for row in layers.values()) == pytest.approx(comps["reencode"]["flops"], rel=0.05)
+    out = capsys.readouterr().out
+    assert "vae_update" in out and "  conv1_7x7x32" in out
