@@ -18,10 +18,12 @@ All modules take unbatched or batched inputs as documented; parameters are plain
 so everything vmaps over a leading runs axis of parameters.
 
 Speed notes (2-core CPU, jax 0.10.2, see bench.py): every strided convolution is
-rewritten as space-to-depth + a stride-1 2x2 convolution (`conv2x2`) whose backward pass
+differentiated as space-to-depth + a stride-1 2x2 convolution (`conv2x2`) whose backward pass
 is hand-written: the input gradient is another plain convolution and the kernel gradient
 four matmuls. XLA's own gradients of strided / transposed convolutions go through
-lhs-dilated or image-sized-window convolutions that run 2-6x slower here.
+lhs-dilated or image-sized-window convolutions that run 2-6x slower here. The encoder's
+forward pass, alone what re-encoding runs, is XLA's strided convolution where the input has
+enough channels (`conv4x4_stride2`): it needs no space-to-depth transpose of its input.
 """
 
 from __future__ import annotations
@@ -201,9 +203,54 @@ def kernel4_to_s2d(w4):
     return w4.reshape(2, 2, 2, 2, cin, cout).transpose(0, 2, 1, 3, 4, 5).reshape(2, 2, 4 * cin, cout)
 
 
-def conv4x4_stride2(x, w4):
-    """VALID 4x4 stride-2 convolution (the paper's encoder layer) via space-to-depth."""
+# Below this many input channels, conv4x4_stride2's forward runs as space-to-depth + conv2x2:
+# XLA's strided convolution vectorises over the input channels, and the frames have 3 (12 after
+# space-to-depth). The first encoder layer on 512 frames, on a 2-core Intel Xeon: 52 ms a call in
+# the space-to-depth form against 62 ms strided (median of 6 rounds); docs/cost_model.md.
+_STRIDED_MIN_CHANNELS = 8
+
+
+def _conv4x4_stride2_s2d(x, w4):
+    """The convolution as space-to-depth + conv2x2 (exact: the same taps, regrouped)."""
     return conv2x2(space_to_depth(x), kernel4_to_s2d(w4))
+
+
+def _conv4x4_stride2_conv(x, w4):
+    """conv4x4_stride2's forward for one kernel: XLA's own strided convolution, which skips the
+    space-to-depth transpose of the input (as much time as the convolution itself for the second
+    encoder layer on 512 frames), or the space-to-depth form for inputs of few channels."""
+    if x.shape[-1] < _STRIDED_MIN_CHANNELS:
+        return _conv2x2_conv(space_to_depth(x), kernel4_to_s2d(w4))
+    return lax.conv_general_dilated(x, w4, (2, 2), "VALID", dimension_numbers=_DN)
+
+
+def _conv4x4_stride2_matmul(x, w4):
+    return _conv2x2_matmul(space_to_depth(x), kernel4_to_s2d(w4))
+
+
+_conv4x4_stride2_forward = _by_kernel(_conv4x4_stride2_conv, _conv4x4_stride2_matmul)
+
+
+@jax.custom_vjp
+def conv4x4_stride2(x, w4):
+    """VALID 4x4 stride-2 convolution (the paper's encoder layer): x [B,H,W,C], w4 [4,4,C,O].
+
+    The forward is XLA's strided convolution (`_conv4x4_stride2_conv`; under vmap with per-run
+    kernels, batched matmuls); the gradients are those of the space-to-depth form, whose input
+    gradient is a plain convolution where XLA's own is an lhs-dilated one that runs 2-6x slower on
+    a CPU (module docstring)."""
+    return _conv4x4_stride2_forward(x, w4)
+
+
+def _conv4x4_stride2_fwd(x, w4):
+    return _conv4x4_stride2_forward(x, w4), (x, w4)
+
+
+def _conv4x4_stride2_bwd(res, dy):
+    return jax.vjp(_conv4x4_stride2_s2d, *res)[1](dy)
+
+
+conv4x4_stride2.defvjp(_conv4x4_stride2_fwd, _conv4x4_stride2_bwd)
 
 
 def upconv4x4_stride2(x, w):

@@ -28,11 +28,12 @@ def test_conv4x4_stride2_matches_xla_strided_conv_values_and_gradients():
             out.append((y,) + vjp(jnp.sin(y)))
         return out
 
-    # odd and even sizes: the space-to-depth rewrite must drop exactly the unread row/col
-    for h, w in [(16, 16), (15, 13)]:
-        rng = np.random.default_rng(h * 100 + w)  # numpy inputs: no per-shape RNG compiles
-        x = rng.standard_normal((2, h, w, 5), np.float32)
-        k4 = rng.standard_normal((4, 4, 5, 6), np.float32)
+    # odd and even sizes: the space-to-depth rewrite must drop exactly the unread row/col; 5 input
+    # channels take the space-to-depth forward, 9 XLA's strided one (nets._STRIDED_MIN_CHANNELS)
+    for h, w, c in [(16, 16, 5), (15, 13, 5), (16, 16, 9), (15, 13, 9)]:
+        rng = np.random.default_rng(h * 100 + w + c)  # numpy inputs: no per-shape RNG compiles
+        x = rng.standard_normal((2, h, w, c), np.float32)
+        k4 = rng.standard_normal((4, 4, c, 6), np.float32)
         new, old = both(x, k4)
         assert new[0].shape == old[0].shape == (2, (h - 4) // 2 + 1, (w - 4) // 2 + 1, 6)
         for a, b in zip(new, old):
@@ -101,16 +102,26 @@ def test_conv2x2_matmul_forms_match_lax_references():
     np.testing.assert_allclose(dx, want, rtol=1e-4, atol=1e-4)
 
 
+# (nets function, its stride, x, w and dy shapes of one run): conv2x2, and conv4x4_stride2 with
+# enough input channels for its strided forward
+VMAPPED_CONVS = {
+    "conv2x2": (nets.conv2x2, 1, (3, 9, 7, 4), (2, 2, 4, 8), (3, 8, 6, 8)),
+    "conv4x4_stride2": (nets.conv4x4_stride2, 2, (3, 11, 10, 9), (4, 4, 9, 8), (3, 4, 4, 8)),
+}
+
+
+@pytest.mark.parametrize("conv", list(VMAPPED_CONVS))
 @pytest.mark.parametrize("batched", ["x and w", "w", "x"])
-def test_vmapped_conv2x2_matches_per_run_lax_conv_without_grouped_convolutions(batched):
-    """conv2x2 under vmap, value and both gradients, against lax per run. A batched kernel
-    (per-run weights) computes as batched matmuls, with no convolution left in the program;
-    a shared kernel stays one convolution over the folded batch."""
+def test_vmapped_convs_match_per_run_lax_conv_without_grouped_convolutions(conv, batched):
+    """conv2x2 and conv4x4_stride2 under vmap, value and both gradients, against lax per run. A
+    batched kernel (per-run weights) computes as batched matmuls, with no convolution left in the
+    program; a shared kernel stays one convolution over the folded batch."""
+    f, stride, x_shape, w_shape, dy_shape = VMAPPED_CONVS[conv]
     rng = np.random.default_rng(5)
     r = 2
-    x = rng.standard_normal((r, 3, 9, 7, 4), np.float32)
-    w = rng.standard_normal((r, 2, 2, 4, 8), np.float32)
-    dy = rng.standard_normal((r, 3, 8, 6, 8), np.float32)
+    x = rng.standard_normal((r,) + x_shape, np.float32)
+    w = rng.standard_normal((r,) + w_shape, np.float32)
+    dy = rng.standard_normal((r,) + dy_shape, np.float32)
     ax = (0 if "x" in batched else None, 0 if "w" in batched else None)
     xs, ws = (x if ax[0] == 0 else x[0]), (w if ax[1] == 0 else w[0])
 
@@ -118,8 +129,8 @@ def test_vmapped_conv2x2_matches_per_run_lax_conv_without_grouped_convolutions(b
         y, vjp = jax.vjp(f, x, w)
         return (y,) + vjp(dy)
 
-    ours = jax.jit(jax.vmap(lambda x, w, dy: fwd_bwd(nets.conv2x2, x, w, dy), in_axes=ax + (0,)))
-    ref = lambda x, w: lax.conv_general_dilated(x, w, (1, 1), "VALID", dimension_numbers=DN)  # noqa: E731
+    ours = jax.jit(jax.vmap(lambda x, w, dy: fwd_bwd(f, x, w, dy), in_axes=ax + (0,)))
+    ref = lambda x, w: lax.conv_general_dilated(x, w, (stride,) * 2, "VALID", dimension_numbers=DN)  # noqa: E731
     got = ours(xs, ws, dy)
     for k in range(r):  # run k's (y, dx, dw), with the shared input where one is unbatched
         want = fwd_bwd(ref, x[k] if ax[0] == 0 else x[0], w[k] if ax[1] == 0 else w[0], dy[k])
