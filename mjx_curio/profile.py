@@ -261,18 +261,19 @@ def profile(args: dict, time_fn) -> dict:
     rng = np.random.default_rng(args["seed"])
     rows: dict = {}
 
-    def timed(fn, fn_args, per_step) -> dict:
+    def timed(fn, fn_args, per_step):
+        """(fn's row: time, compile time, counts; fn compiled for fn_args)"""
         t0, c0 = time.perf_counter(), time.process_time()
         traced = jax.jit(fn).trace(*fn_args)
         compiled = traced.lower().compile()
         compile_s, compile_cpu_s = time.perf_counter() - t0, time.process_time() - c0
         _, best = time_fn(compiled, fn_args, iters, repeats)
         return {"ms_per_call": best * 1e3, "calls_per_run_step": per_step, "compile_s": round(compile_s, 2),
-                "compile_cpu_s": round(compile_cpu_s, 2), **counts(compiled, traced.jaxpr.jaxpr)}
+                "compile_cpu_s": round(compile_cpu_s, 2), **counts(compiled, traced.jaxpr.jaxpr)}, compiled
 
     def measure(name, fn, fn_args, per_step):
         if name in parts:
-            rows[name] = timed(fn, fn_args, per_step)
+            rows[name] = timed(fn, fn_args, per_step)[0]
 
     if "run_step" in parts:
         # The whole run-step: the sweep's own program on one run, a chunk = one update period.
@@ -356,9 +357,8 @@ def profile(args: dict, time_fn) -> dict:
         # the re-encoding's encoder pass stage by stage, each on the previous stage's output
         x = batch.frames[:, 1:].reshape((-1,) + batch.frames.shape[3:])  # B x T x n_agents frames
         for stage, name in enumerate(encoder_stage_names(lc)):
-            fn = partial(encoder_stage, lc, stage)
-            layers[name] = timed(fn, (learner.vae, x), reencode_per_step)
-            x = jax.jit(fn)(learner.vae, x)
+            layers[name], stage_fn = timed(partial(encoder_stage, lc, stage), (learner.vae, x), reencode_per_step)
+            x = stage_fn(learner.vae, x)  # the next stage's input, by the program just timed
 
     def mdn_update(p, st, carry0, z, a):  # learner_update's MDN-RNN part (on the stored latents)
         (nll, (mix, h_in)), g = jax.value_and_grad(lambda p: wm.mdn_loss(lc, p, carry0, z, a), has_aux=True)(p)
