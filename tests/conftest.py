@@ -1,5 +1,6 @@
 """Shared pytest setup: GL for MuJoCo's renderer, one XLA compilation cache for the whole
-session (in-process and subprocess alike), and one tiny sweep that several test files read."""
+session (in-process and subprocess alike), and the sweeps several test files read, made on the
+second core while the tests that need none run first."""
 
 import contextlib
 import ctypes.util
@@ -115,14 +116,6 @@ def sweep_in_process(*args: str, env: dict | None = None, check: bool = True) ->
     return rc, err.getvalue()
 
 
-@pytest.fixture(scope="session")
-def tiny_sweep(tmp_path_factory) -> pathlib.Path:
-    """A finished tiny sweep directory (made once per test session)."""
-    out = tmp_path_factory.mktemp("sweeps") / "tiny"
-    sweep_in_process(*TINY_SWEEP, f"out={out}")
-    return out
-
-
 # The quick tier, `pytest -m "not slow"`: every test that needs one of the session's sweeps (each
 # compiles and runs a whole sweep program) is slow; other slow tests carry the mark themselves.
 SWEEP_FIXTURES = {"tiny_sweep", "tiny_single_sweep", "tiny_sweeps_dir", "alone_sweep", "sharded_sweep", "crashed_sweep",
@@ -134,13 +127,21 @@ def pytest_collection_modifyitems(config, items):
     for item in items:
         if SWEEP_FIXTURES & set(getattr(item, "fixturenames", ())):
             item.add_marker(pytest.mark.slow)
+    # The test files that read none of the session's sweeps run first, the others after them (each
+    # group in pytest's order; whole files, so a module's fixtures are set up once): the sweeps are
+    # made on the second core meanwhile, so the files that read them find them made rather than
+    # wait for them.
+    reads = {item.module for item in items if _sweeps_read(item) & SESSION_SWEEPS}
+    items[:] = [i for i in items if i.module not in reads] + [i for i in items if i.module in reads]
 
 
 # ------------------------------------------------------------------------------------------------
 # Sweeps made in background processes, one after another in the order the tests read them, from as
-# soon as collection shows which are needed: each is its own program (nothing in the cache to
-# share), so it compiles on the second core while the tests before it run on the first. One at a
-# time, because two beside the test process oversubscribe a 2-core machine (XLA's thread pools).
+# soon as collection shows which are needed: each compiles and runs on the second core while the
+# tests before it run on the first (and the files that read none run first of all). One at a time,
+# because two beside the test process oversubscribe a 2-core machine (XLA's thread pools). The
+# in-process sweeps of tests/test_sweep.py that repeat the tiny sweep load its compiled program from
+# the persistent cache.
 
 # The smallest sweep there is: one agent, 8 px, tiny networks, 40 steps; it runs every stage (plan,
 # lock, program, chunks, metrics, checkpoints, manifest). Compiling it (mostly MJX's physics, ~90 s of
@@ -149,8 +150,8 @@ MINIMAL_SWEEP = ("agents=1", "policies=eps,ucb", "seeds=1", "image=8", "latent=4
                  "dec_channels=4,4", "rnn_hidden=8", "mixtures=2", "self_hidden=8", "batch=2", "seq_len=4", "buffer=40",
                  "steps=40", "chunk=20", "checkpoint_every=20", "keep_steps=20", "keep_every=0", "progress=false")
 
-# The analysis, notebook and video tests read a tiny single-agent sweep beside the tiny sweep (made in
-# this process), in one directory, as the notebook reads them.
+# The analysis, notebook and video tests read a tiny single-agent sweep beside the tiny sweep, in one
+# directory, as the notebook reads them.
 TINY_SINGLE_SWEEP = ("agents=1", "policies=eps,ucb", "seeds=1", "steps=200", "image=16", *SMALL_LEARNER, "buffer=500",
                      "chunk=100", "checkpoint_every=100", "keep_steps=100", "keep_every=0", "progress=false")
 
@@ -166,7 +167,8 @@ MINIMAL_SWEEP_RESUMED = (*(a for a in MINIMAL_SWEEP if a != "steps=40"), "steps=
 INTERRUPTED_SWEEP = (*(a for a in TINY_SWEEP if not a.startswith(("steps=", "checkpoint_every=", "keep_steps=", "progress="))),
                      "steps=300", "checkpoint_every=300", "keep_steps=300", "progress=true")
 
-BACKGROUND_SWEEPS = {  # in the order the test files read them
+BACKGROUND_SWEEPS = {  # made in the order the session's tests first read them
+    "tiny_sweep": TINY_SWEEP,
     "tiny_single_sweep": TINY_SINGLE_SWEEP,
     "minimal_sweep": MINIMAL_SWEEP,
     "minimal_sweep_resumed": MINIMAL_SWEEP_RESUMED,
@@ -176,6 +178,9 @@ BACKGROUND_SWEEPS = {  # in the order the test files read them
     "sigterm_sweep": INTERRUPTED_SWEEP,
     "sharded_sweep": (*TINY_SWEEP, "host_devices=2"),  # the tiny sweep on two forced host devices
 }
+# What a test reads of them: a sweep's fixture (or its name, as interrupted_sweep's parameter) or a
+# fixture that reads one.
+SESSION_SWEEPS = SWEEP_FIXTURES | set(BACKGROUND_SWEEPS)
 RESUMED_FROM = {"minimal_sweep_resumed": "minimal_sweep"}  # starts in a copy of the other, finished
 # The sweeps stopped before their end, for the tests of stopping and resuming: their subprocesses
 # (~35 s each, mostly tracing on one core) run here, on the core the test process leaves idle.
@@ -260,8 +265,10 @@ def pytest_collection_finish(session):
                 item.add_marker(pytest.mark.skip(reason="the full suite's slow tests cover this in depth"))
     if session.config.option.collectonly:
         return
-    needed = [name for name in BACKGROUND_SWEEPS
-              if any(name in _sweeps_read(item) and not _skipped(item) for item in session.items)]
+    needed = []
+    for item in session.items:
+        if not _skipped(item):
+            needed += [name for name in BACKGROUND_SWEEPS if name in _sweeps_read(item) and name not in needed]
     threading.Thread(target=_run_in_turn, args=(needed,), daemon=True).start()
 
 
@@ -289,6 +296,12 @@ def pytest_sessionfinish(session, exitstatus):
         shutil.rmtree(out.parent, ignore_errors=True)
     if _CACHE_IS_TEMPORARY:
         shutil.rmtree(CACHE, ignore_errors=True)
+
+
+@pytest.fixture(scope="session")
+def tiny_sweep() -> pathlib.Path:
+    """The tiny sweep (TINY_SWEEP: 8 runs of two agents), finished."""
+    return _finished_background("tiny_sweep")
 
 
 @pytest.fixture(scope="session")
