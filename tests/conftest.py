@@ -131,8 +131,8 @@ def pytest_collection_modifyitems(config, items):
     # group in pytest's order; whole files, so a module's fixtures are set up once): the sweeps are
     # made on the second core meanwhile, so the files that read them find them made rather than
     # wait for them.
-    reads = {item.module for item in items if _sweeps_read(item) & SESSION_SWEEPS}
-    items[:] = [i for i in items if i.module not in reads] + [i for i in items if i.module in reads]
+    reads = {item.path for item in items if _sweeps_read(item) & SESSION_SWEEPS}
+    items[:] = [i for i in items if i.path not in reads] + [i for i in items if i.path in reads]
 
 
 # ------------------------------------------------------------------------------------------------
