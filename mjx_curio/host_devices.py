@@ -20,6 +20,8 @@ reading their command line and before their first JAX computation. The rule (`ch
   (`bench what=sweep`, latents=reencode): one run alone 18.0 run-steps/s on one device and 9.8
   on two (one of them padding), 24 runs 1.09 times as fast on two devices as on one; so 3 runs
   would take 2 x 102 ms a step on two devices against 3 x 56 ms on one.
+  No more devices than cores: 24 runs on four devices of a 2-core CPU ran 7-12 % slower than on
+  two (README, Benchmarks), the programs sharing a core contending for it.
 On a GPU the flag changes nothing that the sweep uses: it only splits the host CPU platform.
 """
 
