@@ -57,25 +57,30 @@ os.environ.setdefault("JAX_COMPILATION_CACHE_MAX_SIZE", str(2 << 30))
 # sharding tests ask for two devices explicitly (host_devices=2).
 os.environ["XLA_FLAGS"] = (os.environ.get("XLA_FLAGS", "") + " --xla_force_host_platform_device_count=1").strip()
 
-# The quick tier's programs compile for compile speed: its tests compile far more than they run.
-# LLVM's optimisation off and XLA CPU's older fusion emitters (its MLIR ones are the default) took
-# the arena's MJX step from 19.3 s to 7.9 s of XLA compile on a 2-core Intel Xeon, and the quick
-# tier from 199 s to 94-130 s with a cold cache. Its tests compare with oracles within tolerances
-# or over horizons too short for rounding to grow, and pass under both codegens. The full suite
-# (the README's test command, CI's) compiles as users' runs do, with XLA's defaults: its tests of
-# long chaotic runs (a run alone and inside a sweep, bit for bit; the arena's long random rollout)
-# are about the programs users run. Under these flags a run alone and the same run in a sweep
-# were measured to differ in the last bit. A value set in XLA_FLAGS wins.
-QUICK_TIER_XLA_FLAGS = {"xla_backend_optimization_level": "0", "xla_cpu_use_fusion_emitters": "false"}
+# Every program of the session compiles for compile speed: LLVM's optimisation off and XLA CPU's
+# older fusion emitters (its MLIR ones are the default). The tests compile far more than they run:
+# these flags took the arena's MJX step from 19.3 s to 7.9 s of XLA compile on a 2-core Intel Xeon
+# (30 s to 15 s on an AMD EPYC). Almost every test compares with an oracle within a tolerance, over
+# a horizon too short for rounding to grow, or against a program compiled alike (a resumed sweep
+# against the same sweep that never stopped), and passes under either codegen. What is about the
+# programs users run compiles as theirs do, with XLA's defaults: the two sweeps of the test that a
+# run alone and the same run inside a sweep agree bit for bit (made without these flags: under
+# them the two were measured to differ in the last bit), and the programs given USERS_CODEGEN,
+# the same options at XLA's default values, for one jit: the arena's long chaotic rollout, and the
+# programs that run far longer than they compile (the default codegen runs them about 4 to 5
+# times as fast: the arena's rollout in 10 s, not 55 s, on an AMD EPYC). A value set in XLA_FLAGS
+# wins.
+FAST_COMPILE_XLA_FLAGS = {"xla_backend_optimization_level": "0", "xla_cpu_use_fusion_emitters": "false"}
+USERS_CODEGEN = {"xla_backend_optimization_level": 3, "xla_cpu_use_fusion_emitters": True}
+# The flags added here (not those the user set), which the sweeps compiled as users' are leave out.
+ADDED_XLA_FLAGS = [f"--{flag}={value}" for flag, value in FAST_COMPILE_XLA_FLAGS.items()
+                   if f"--{flag}=" not in os.environ["XLA_FLAGS"]]
+os.environ["XLA_FLAGS"] = " ".join([os.environ["XLA_FLAGS"], *ADDED_XLA_FLAGS])
 
 
-def pytest_configure(config):
-    # Before collection imports the test modules, so before JAX starts: the flags still apply, in
-    # this process and in the sweeps it starts.
-    if "not slow" in (config.option.markexpr or ""):
-        for flag, value in QUICK_TIER_XLA_FLAGS.items():
-            if f"--{flag}=" not in os.environ["XLA_FLAGS"]:
-                os.environ["XLA_FLAGS"] += f" --{flag}={value}"
+def users_xla_flags() -> str:
+    """XLA_FLAGS for a process that compiles as users' runs do."""
+    return " ".join(f for f in os.environ["XLA_FLAGS"].split() if f not in ADDED_XLA_FLAGS)
 
 
 # The session's sweeps test the machinery (plan, program, chunks, metrics, checkpoints, resume,
@@ -118,8 +123,8 @@ def sweep_in_process(*args: str, env: dict | None = None, check: bool = True) ->
 
 # The quick tier, `pytest -m "not slow"`: every test that needs one of the session's sweeps (each
 # compiles and runs a whole sweep program) is slow; other slow tests carry the mark themselves.
-SWEEP_FIXTURES = {"tiny_sweep", "tiny_single_sweep", "tiny_sweeps_dir", "alone_sweep", "sharded_sweep", "crashed_sweep",
-                  "interrupted_sweep"}
+SWEEP_FIXTURES = {"tiny_sweep", "tiny_single_sweep", "tiny_sweeps_dir", "sharded_sweep", "crashed_sweep",
+                  "interrupted_sweep", "users_tiny_sweep", "users_alone_sweep"}
 
 
 @pytest.hookimpl(tryfirst=True)  # before -m deselects by marker
@@ -133,6 +138,10 @@ def pytest_collection_modifyitems(config, items):
     # wait for them.
     reads = {item.path for item in items if _sweeps_read(item) & SESSION_SWEEPS}
     items[:] = [i for i in items if i.path not in reads] + [i for i in items if i.path in reads]
+    # The tests of the sweeps compiled as users' runs are (~90 s of CPU each) come last of all, so
+    # that the background makes those sweeps last, while the tests before them run.
+    users = [i for i in items if _sweeps_read(i) & USERS_CODEGEN_SWEEPS]
+    items[:] = [i for i in items if i not in users] + users
 
 
 # ------------------------------------------------------------------------------------------------
@@ -172,12 +181,15 @@ BACKGROUND_SWEEPS = {  # made in the order the session's tests first read them
     "tiny_single_sweep": TINY_SINGLE_SWEEP,
     "minimal_sweep": MINIMAL_SWEEP,
     "minimal_sweep_resumed": MINIMAL_SWEEP_RESUMED,
-    "alone_sweep": ALONE_SWEEP,
     "crashed_sweep": TINY_SWEEP,  # killed inside its step-200 checkpoint write (STOPPED_BY)
     "sigint_sweep": INTERRUPTED_SWEEP,
     "sigterm_sweep": INTERRUPTED_SWEEP,
     "sharded_sweep": (*TINY_SWEEP, "host_devices=2"),  # the tiny sweep on two forced host devices
+    # The tiny sweep and one of its runs alone, compiled as users' runs are (USERS_CODEGEN_SWEEPS).
+    "users_tiny_sweep": TINY_SWEEP,
+    "users_alone_sweep": ALONE_SWEEP,
 }
+USERS_CODEGEN_SWEEPS = {"users_tiny_sweep", "users_alone_sweep"}
 # What a test reads of them: a sweep's fixture (or its name, as interrupted_sweep's parameter) or a
 # fixture that reads one.
 SESSION_SWEEPS = SWEEP_FIXTURES | set(BACKGROUND_SWEEPS)
@@ -204,6 +216,8 @@ def _start_background(name: str) -> None:
     if name in RESUMED_FROM:
         shutil.copytree(_background[RESUMED_FROM[name]][0], out)
     env, signum, after = STOPPED_BY.get(name, ({}, None, None))
+    if name in USERS_CODEGEN_SWEEPS:
+        env = dict(env, XLA_FLAGS=users_xla_flags())
     stderr = out.parent / "stderr.txt"
     with open(stderr, "w") as err:  # a file, not a pipe: nothing blocks if nobody reads it yet
         proc = subprocess.Popen([sys.executable, "-m", "mjx_curio.sweep", *BACKGROUND_SWEEPS[name], f"out={out}",
@@ -339,9 +353,15 @@ def minimal_sweep_resumed() -> pathlib.Path:
 
 
 @pytest.fixture(scope="session")
-def alone_sweep() -> pathlib.Path:
-    """ALONE_SWEEP (one run of the tiny sweep on its own), finished."""
-    return _finished_background("alone_sweep")
+def users_tiny_sweep() -> pathlib.Path:
+    """TINY_SWEEP compiled as users' runs are (XLA's default codegen), finished."""
+    return _finished_background("users_tiny_sweep")
+
+
+@pytest.fixture(scope="session")
+def users_alone_sweep() -> pathlib.Path:
+    """ALONE_SWEEP (one run of the tiny sweep on its own) compiled as users' runs are, finished."""
+    return _finished_background("users_alone_sweep")
 
 
 @pytest.fixture(scope="session")

@@ -11,6 +11,7 @@ import numpy as np
 import optax
 import pytest
 
+from conftest import USERS_CODEGEN
 from mjx_curio import world_model as wm
 from mjx_curio.config import LearnerConfig
 from mjx_curio.nets import Mixture
@@ -89,7 +90,8 @@ def mdn_fns():
         carry = jax.tree.map(lambda x: jnp.broadcast_to(x, (z.shape[0],) + x.shape), wm.initial_carry(cfg))
         return wm.mdn_loss(cfg, p, carry, z, a)
 
-    @jax.jit
+    # Run thousands of times: compiled as users' runs are, it runs several times faster (conftest.py).
+    @functools.partial(jax.jit, compiler_options=USERS_CODEGEN)
     def train(p, s, z, a):
         (nll, _), g = jax.value_and_grad(seq_loss, has_aux=True)(p, z, a)
         u, s = opt.update(g, s, p)
