@@ -1,10 +1,11 @@
 """What a sweep's manifest records about how it was made: the command, every setting, the runs,
-the package versions, the device and the git commit."""
+the package versions, the device, the XLA flags it compiled with and the git commit."""
 
 from __future__ import annotations
 
 import dataclasses
 import datetime
+import os
 import platform
 import subprocess
 import pathlib
@@ -40,7 +41,9 @@ def manifest(p, run_cfg, devices, n_pad: int, n_windows: int) -> dict:
         "checkpoints": {"state": "checkpoints/state/<step>", "replay": "checkpoints/replay/<step>"},
         "versions": versions(),
         "device": {"platform": devices[0].platform, "kind": devices[0].device_kind, "count": len(devices),
-                   "processes": distributed.process_count(), "host": platform.node(), "cpu": cpu_name()},
+                   "processes": distributed.process_count(), "host": platform.node(), "cpu": cpu_name(),
+                   # XLA's codegen options set here move float rounding, so the last bits of a run.
+                   "xla_flags": os.environ.get("XLA_FLAGS", "")},
         "git": git(),
     }
 

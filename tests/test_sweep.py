@@ -23,7 +23,7 @@ import jax
 import numpy as np
 import pytest
 
-from conftest import CACHE, STOPPED_BY, TINY_SWEEP, sweep_in_process
+from conftest import ADDED_XLA_FLAGS, CACHE, STOPPED_BY, TINY_SWEEP, sweep_in_process
 from mjx_curio import analysis as an
 from mjx_curio import checkpoint as ckpt_lib
 from mjx_curio import sweep as sweep_lib
@@ -73,6 +73,8 @@ def test_tiny_sweep_writes_metrics_and_checkpoints_that_load_back(tiny_sweep):
     for key in ("versions", "device", "git", "config"):
         assert manifest[key], key
     assert manifest["versions"]["jax"] and manifest["device"]["platform"] == "cpu"
+    # Compiled for compile speed, as every program of the session but the users' codegen ones.
+    assert all(flag in manifest["device"]["xla_flags"].split() for flag in ADDED_XLA_FLAGS), manifest["device"]
     assert json.loads((tiny_sweep / "progress.json").read_text())["steps_done"] == 200
 
     m = _metrics(tiny_sweep)
@@ -103,6 +105,8 @@ def test_tiny_sweep_writes_metrics_and_checkpoints_that_load_back(tiny_sweep):
 def test_the_same_seed_gives_the_same_metrics_alone_and_inside_a_sweep(users_tiny_sweep, users_alone_sweep):
     """Both sweeps compiled with XLA's default codegen, as users' runs are (conftest.py)."""
     manifest = json.loads((users_tiny_sweep / "manifest.json").read_text())
+    for m in (manifest, json.loads((users_alone_sweep / "manifest.json").read_text())):
+        assert not set(m["device"]["xla_flags"].split()) & set(ADDED_XLA_FLAGS), m["device"]
     (index,) = [r["index"] for r in manifest["runs"] if r["name"] == "ucb-ucb_c1-seed1"]
     _assert_same_metrics(_metrics(users_alone_sweep, 0), _metrics(users_tiny_sweep, index), "run alone vs in the sweep")
 
