@@ -287,7 +287,7 @@ def bench_sweep(args: dict) -> dict:
                             learner=learner, **(config_lib.legacy_settings(run_lib.RunConfig) if old else {}))
     policies = ("eps", "boltzmann", "ucb")
     runs = tuple(RunSpec(policies[i % 3], args["seed"] + i // 3, 0.2, 1.5, 1.0) for i in range(args["runs"]))
-    n_pad = -len(runs) % len(devices)
+    n_pad = host_devices.padding(len(runs), len(devices))
     program = SweepProgram(cfg, runs, n_pad, args["steps"])
     t0 = time.perf_counter()
     states = program.init()
@@ -359,8 +359,8 @@ KEYS = [
         as_choice(tuple(name for name, _ in profile_lib.COMPONENTS)), many=True),
     Key("peak_n", 2048, "profile: side of the float32 matmul that measures the achievable peak", as_int(16)),
     Key("runs_loop", "auto", "sweep: map | vmap | auto (map on CPU)", as_choice(("auto", "map", "vmap"))),
-    Key("host_devices", "auto", "sweep: CPU devices the runs are spread over, auto (one per physical core, at most "
-        "one per run, as the sweep) or a number; the other benches time one program on one device", AutoOr(Int(1))),
+    Key("host_devices", "auto", "sweep: CPU devices the runs are spread over, auto (as the sweep chooses: one per "
+        "physical core, at most one per run, padding at most a tenth) or a number; the other benches time one program on one device", AutoOr(Int(1))),
     Key("fidelity", "paper", "sweep: paper (the defaults) | legacy (the settings before the paper-faithful defaults: "
         "square camera, mean latents, summed curiosity, unit pair friction, free bits) | both, one after the other",
         as_choice(("paper", "legacy", "both"))),

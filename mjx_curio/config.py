@@ -456,7 +456,8 @@ class SweepConfig:
     distributed: str = knob("auto", "jax.distributed.initialize() first: true, false, auto (when a cluster is detected)",
                             Choice(("auto", "true", "false")), resume_free=True, group=_RUN)
     host_devices: Any = knob("auto", "CPU devices the runs are spread over: auto (the most, at most one per physical "
-                             "core, that divide the runs evenly; a resumed sweep keeps its count) or a number", AutoOr(Int(1)),
+                             "core and one per run, whose padding runs are at most a tenth of the runs; a resumed "
+                             "sweep keeps its count) or a number", AutoOr(Int(1)),
                              resume_free=True, group=_RUN)
     compile_cache: str = knob("~/.cache/mjx_curio/xla", "persistent XLA compilation cache directory, or none", Text(),
                               resume_free=True, group=_RUN)

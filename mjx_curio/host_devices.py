@@ -13,13 +13,16 @@ reading their command line and before their first JAX computation. The rule (`ch
 - else, resuming a sweep made on the CPU, the count it was made with: the same program then
   continues the runs bit for bit as if they had never stopped (another count is another program,
   see run.py), and the checkpoints hold as many padding runs as that count required;
-- else as many devices as physical cores allow while every device holds as many runs: the
-  largest count no greater than the cores that divides the runs (24 runs on 2 cores: 2; 9 runs:
-  1; 1 run: 1). Padding is what a count that does not divide would cost: copies of run 0 whose
-  results are dropped (program.py), computed on a device with fewer threads. Measured on 2 cores
-  (`bench what=sweep`, latents=reencode): one run alone 18.0 run-steps/s on one device and 9.8
-  on two (one of them padding), 24 runs 1.09 times as fast on two devices as on one; so 3 runs
-  would take 2 x 102 ms a step on two devices against 3 x 56 ms on one.
+- else as many devices as physical cores allow, no more than the runs, while padding adds at most
+  a tenth to the work (`PADDING_TOLERANCE`): the largest such count (24 runs on 2 cores: 2; 15
+  runs: 2, one padding run; 9 runs: 1, as one padding run would add 11 %; 1 run: 1). Padding
+  fills the last device's slots with copies of run 0 whose results are dropped (program.py), and
+  they cost as much as real runs. One device still uses every core through XLA's thread pool,
+  only less well than a device per core, so a second device pays for a little padding, not for
+  much. Measured on 2 cores (`bench what=sweep runs=R steps=100 repeats=1 host_devices=D`, AMD
+  EPYC, the defaults, D = 1 then 2, twice): 15 runs 12.2 → 14.3 and 13.1 → 14.8 run-steps/s
+  (1.17x, 1.13x, one padding run in 16 slots); 9 runs 13.9 → 13.3 and 14.7 → 13.0 (0.96x,
+  0.88x, one in 10); one run alone 18.0 on one device and 9.8 on two (its copy on the other).
   No more devices than cores: 24 runs on four devices of a 2-core CPU ran 7-12 % slower than on
   two (README, Benchmarks), the programs sharing a core contending for it.
 On a GPU the flag changes nothing that the sweep uses: it only splits the host CPU platform.
@@ -33,6 +36,9 @@ import re
 from mjx_curio.config import ConfigError
 
 FLAG = "xla_force_host_platform_device_count"
+# The most padding runs `auto` accepts, as a share of the real runs: between the 1/15 that measured
+# faster on a second device and the 1/9 that measured slower (module docstring).
+PADDING_TOLERANCE = 0.1
 
 
 def physical_cores() -> int:
@@ -71,7 +77,13 @@ def choose(requested, n_runs: int, saved: int | None = None) -> int:
         return given
     if saved is not None:
         return saved
-    return max(d for d in range(1, max(1, min(physical_cores(), n_runs)) + 1) if n_runs % d == 0)
+    return max(d for d in range(1, max(1, min(physical_cores(), n_runs)) + 1)
+               if padding(n_runs, d) <= PADDING_TOLERANCE * n_runs)
+
+
+def padding(n_runs: int, count: int) -> int:
+    """Copies of run 0 that fill `count` devices' equal shares of `n_runs` runs."""
+    return -n_runs % count
 
 
 def apply(count: int, requested="auto") -> int:

@@ -135,6 +135,7 @@ def _execute(p: Plan, stop: _StopSignals) -> int:
     import jax
 
     from mjx_curio import checkpoint as ckpt_lib
+    from mjx_curio import host_devices
     from mjx_curio import metrics as metrics_lib
     from mjx_curio import provenance
     from mjx_curio.program import SweepProgram
@@ -144,7 +145,7 @@ def _execute(p: Plan, stop: _StopSignals) -> int:
     runs_loop = p.sweep.runs_loop if p.sweep.runs_loop != "auto" else ("map" if devices[0].platform == "cpu" else "vmap")
     cfg = dataclasses.replace(p.run, runs_loop=runs_loop)
     n_runs = len(p.runs)
-    n_pad = -n_runs % len(devices)  # copies of run 0 so every device holds as many runs
+    n_pad = host_devices.padding(n_runs, len(devices))  # copies of run 0: every device holds as many runs
     steps, every = v["steps"], v["metrics_every"]
     n_windows = steps // every
     ckpts_dir = p.out / "checkpoints"

@@ -24,16 +24,27 @@ def test_physical_cores_counts_each_core_once():
     assert 1 <= cores <= len(os.sched_getaffinity(0))
 
 
-def test_auto_is_the_most_devices_the_cores_allow_without_padding(no_flag, monkeypatch):
+def test_auto_is_the_most_devices_the_cores_allow_with_at_most_a_tenth_padding(no_flag, monkeypatch):
     monkeypatch.setattr(host_devices, "physical_cores", lambda: 8)
     assert host_devices.choose("auto", n_runs=24) == 8
     assert host_devices.choose("auto", n_runs=3) == 3  # never more devices than runs
     assert host_devices.choose("auto", n_runs=1) == 1
-    assert host_devices.choose("auto", n_runs=20) == 5  # 8 would pad 4 runs: 5 devices of 4 runs
+    assert host_devices.choose("auto", n_runs=20) == 7  # 8 would pad 4 runs (20 %), 7 pads 1 (5 %)
     assert host_devices.choose("auto", n_runs=7) == 7
+    assert host_devices.choose("auto", n_runs=10) == 5  # 8 would pad 6, 6 and 7 pad 2 and 4
     monkeypatch.setattr(host_devices, "physical_cores", lambda: 2)
     assert host_devices.choose("auto", n_runs=24) == 2
-    assert host_devices.choose("auto", n_runs=9) == 1  # 2 devices would pad one run
+    assert host_devices.choose("auto", n_runs=15) == 2  # one padding run, 1/15
+    assert host_devices.choose("auto", n_runs=10) == 2
+    assert host_devices.choose("auto", n_runs=9) == 1  # one padding run would be 1/9
+    assert host_devices.choose("auto", n_runs=3) == 1
+
+
+def test_padding_fills_every_device_to_the_same_number_of_runs():
+    for n_runs in range(1, 30):
+        for count in range(1, 9):
+            pad = host_devices.padding(n_runs, count)
+            assert 0 <= pad < count and (n_runs + pad) % count == 0
 
 
 def test_what_the_user_set_wins(no_flag, monkeypatch):
