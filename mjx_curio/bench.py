@@ -360,7 +360,8 @@ KEYS = [
     Key("peak_n", 2048, "profile: side of the float32 matmul that measures the achievable peak", as_int(16)),
     Key("runs_loop", "auto", "sweep: map | vmap | auto (map on CPU)", as_choice(("auto", "map", "vmap"))),
     Key("host_devices", "auto", "sweep: CPU devices the runs are spread over, auto (as the sweep chooses: one per "
-        "physical core, at most one per run, padding at most a tenth) or a number; the other benches time one program on one device", AutoOr(Int(1))),
+        "physical core, at most one per run, padding at most a tenth) or a number; the other benches time one "
+        "program on one device", AutoOr(Int(1))),
     Key("fidelity", "paper", "sweep: paper (the defaults) | legacy (the settings before the paper-faithful defaults: "
         "square camera, mean latents, summed curiosity, unit pair friction, free bits) | both, one after the other",
         as_choice(("paper", "legacy", "both"))),
