@@ -27,20 +27,6 @@ import numpy as np
 DOCS = pathlib.Path(__file__).resolve().parents[1] / "docs"
 
 
-def _replay(sweep, step: int) -> dict:
-    """The replay buffers of checkpoint `step` as NumPy arrays (leading runs axis)."""
-    import jax
-    import orbax.checkpoint as ocp
-
-    path = (sweep.checkpoints_dir / "replay" / str(step) / "default").absolute()
-    local = jax.sharding.SingleDeviceSharding(jax.local_devices()[0])
-    with ocp.StandardCheckpointer() as reader:
-        meta = reader.metadata(path)
-        tree = getattr(meta, "item_metadata", meta)
-        target = jax.tree.map(lambda m: jax.ShapeDtypeStruct(m.shape, m.dtype, sharding=local), tree)
-        return jax.tree.map(np.asarray, reader.restore(path, target))
-
-
 def staleness(path: str) -> dict:
     import jax
     import jax.numpy as jnp
@@ -51,7 +37,7 @@ def staleness(path: str) -> dict:
     sweep = an.load(path)
     cfg = sweep.learner_config()
     step = max(sweep.replay_steps())
-    replay = _replay(sweep, step)
+    replay = sweep.restore_replay(step, keys=("frames", "latents", "size", "index"))
     state = sweep.restore_raw(step)
     enc = jax.jit(lambda params, frames: wm.encode(cfg, params, frames))
     rows = []

@@ -22,8 +22,10 @@ import os
 import pathlib
 import shutil
 import signal
+from typing import Collection
 
 import jax
+import numpy as np
 import orbax.checkpoint as ocp
 from orbax.checkpoint.checkpoint_managers import preservation_policy as pp
 
@@ -124,17 +126,27 @@ class Checkpoints:
             replay = jax.tree.map(lambda a: jax.numpy.zeros(a.shape, a.dtype, device=a.sharding), a_replay)
         return run_lib.with_replay(state, replay)
 
-    def restore_raw(self, step: int) -> dict:
-        """Checkpoint `step`'s state as nested dicts of arrays on this process's first device, no
-        target structure needed (what mjx_curio.analysis uses to decode with saved parameters). Reads a
-        sweep saved on any number of devices, e.g. on a GPU host, on a one-CPU laptop."""
-        path = (self.directory / "state" / str(step) / "default").absolute()  # orbax wants absolute paths
-        local = jax.sharding.SingleDeviceSharding(jax.local_devices()[0])
-        with ocp.StandardCheckpointer() as reader:
+    def restore_raw(self, step: int, item: str = "state", keys: Collection[str] | None = None) -> dict:
+        """Checkpoint `step`'s `item` ("state", or "replay" where one was saved) as nested dicts of
+        NumPy arrays, no target structure needed (what mjx_curio.analysis uses to decode with saved
+        parameters). Reads a sweep saved on any number of devices, e.g. on a GPU host, on a one-CPU
+        laptop. With `keys`, only those top-level entries are read and the others are left out: a
+        paper-size replay's frames alone are 245 MB a run."""
+        path = (self.directory / item / str(step) / "default").absolute()  # orbax wants absolute paths
+        with ocp.PyTreeCheckpointer() as reader:
             meta = reader.metadata(path)
-            tree = getattr(meta, "item_metadata", meta)
-            target = jax.tree.map(lambda m: jax.ShapeDtypeStruct(m.shape, m.dtype, sharding=local), tree)
-            return reader.restore(path, target)
+            tree = dict(getattr(meta, "item_metadata", meta).items())
+            unknown = sorted(set(keys or ()) - set(tree))
+            if unknown:
+                raise KeyError(f"{path} has no {', '.join(unknown)}; it holds {', '.join(sorted(tree))}")
+            wanted = {k: keys is None or k in keys for k in tree}
+            # One tree serves as both the structure to restore and the per-leaf arguments: NumPy
+            # arrays for the leaves wanted (no device or sharding involved), ocp.PLACEHOLDER for
+            # the leaves to leave on disk.
+            args = {k: jax.tree.map(lambda _: ocp.RestoreArgs(restore_type=np.ndarray) if wanted[k] else ocp.PLACEHOLDER, v)
+                    for k, v in tree.items()}
+            out = reader.restore(path, args=ocp.args.PyTreeRestore(item=args, restore_args=args))
+        return {k: v for k, v in out.items() if wanted[k]}
 
     def close(self) -> None:
         self.state.close()

@@ -119,6 +119,7 @@ class Sweep:
         self.metrics = metrics
         self._ckpts = None
         self._raw_cache: dict[int, dict] = {}
+        self._replay_cache: dict[tuple, dict] = {}
 
     # -------------------------------------------------------------------------- the runs table
 
@@ -302,8 +303,23 @@ class Sweep:
                 raw = self.checkpoints().restore_raw(step)
             while len(self._raw_cache) >= 2:  # keep two (early and late): a paper-size one is large
                 self._raw_cache.pop(next(iter(self._raw_cache)))
-            self._raw_cache[step] = _to_numpy(raw)
+            self._raw_cache[step] = raw
         return self._raw_cache[step]
+
+    def restore_replay(self, step: int, keys: Sequence[str] = ("latents", "carry", "actions", "size")) -> dict:
+        """The replay buffers of checkpoint `step` (only the newest checkpoint keeps them), entries
+        `keys` of `replay.Replay` as NumPy arrays with a leading runs axis (possibly with
+        `padded_runs` extra copies at the end); the frames are left on disk unless asked for. The
+        last one read is cached."""
+        steps = self.replay_steps()
+        if int(step) not in steps:
+            raise SweepError(f"{self.path} has no replay buffers at step {step}: only the newest checkpoint keeps them; "
+                             f"they exist at steps {', '.join(map(str, steps)) or 'none'}")
+        key = (int(step), tuple(keys))
+        if key not in self._replay_cache:  # one kept: a paper-size replay is large
+            with _quiet_orbax():
+                self._replay_cache = {key: self.checkpoints().restore_raw(int(step), "replay", keys)}
+        return self._replay_cache[key]
 
     def params(self, step: int, run: int | str) -> dict:
         """Run `run`'s network parameters at checkpoint `step`: {"vae", "rnn", "self_model"}, each
@@ -483,14 +499,6 @@ def _quiet_orbax():
         yield
     finally:
         log.setLevel(old)
-
-
-def _to_numpy(tree):
-    if isinstance(tree, dict):
-        return {k: _to_numpy(v) for k, v in tree.items()}
-    if isinstance(tree, (list, tuple)):
-        return type(tree)(_to_numpy(v) for v in tree)
-    return np.asarray(tree)
 
 
 def _index_tree(tree, i: int):
