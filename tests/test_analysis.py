@@ -244,6 +244,41 @@ def test_reconstructions(sweep):
     np.testing.assert_array_equal(p["vae"]["fc"]["kernel"], raw["learner"]["vae"]["fc"]["kernel"][2])
 
 
+def test_action_values(sweep):
+    """Every state of the newest replay, each agent's self-model evaluated by a NumPy MLP, and the
+    actions read back against the UCB counts the checkpoint keeps (every policy counts them)."""
+    run = sweep.select(policy="boltzmann", temperature=0.5)[1]
+    v = an.action_values(sweep, run)
+    assert v.step == 200 and v.actions == tuple(sweep.actions)
+    assert v.q.shape == (200, 2, len(sweep.actions)) and v.taken.shape == (200, 2)  # 200 steps, buffer 500
+    raw = sweep.restore_raw(200)
+    for agent in range(2):
+        np.testing.assert_array_equal(np.bincount(v.taken[:, agent], minlength=len(sweep.actions)),
+                                      raw["counts"][run, agent])
+    replay = sweep.restore_replay(200, keys=("latents", "carry"))
+    assert set(replay) == {"latents", "carry"}  # the frames stay on disk
+    p = sweep.params(200, run)["self_model"]
+    x = np.concatenate([replay["latents"][run, :200], np.repeat(replay["carry"]["1"][run, :200, None], 2, axis=1)], -1)
+    hidden = np.maximum(np.einsum("nai,aij->naj", x, p["Dense_0"]["kernel"]) + p["Dense_0"]["bias"], 0)
+    q = np.einsum("naj,ajk->nak", hidden, p["Dense_1"]["kernel"]) + p["Dense_1"]["bias"]
+    np.testing.assert_allclose(v.q, q, rtol=1e-4, atol=1e-5)
+    np.testing.assert_allclose(v.spread(), q.max(-1) - q.min(-1), rtol=1e-4, atol=1e-5)
+    for t in (0.5, 1.5):
+        pr = v.boltzmann(t)
+        np.testing.assert_allclose(pr.sum(-1), 1.0, rtol=1e-12)
+        np.testing.assert_allclose(np.log(pr[..., 3] / pr[..., 0]), (v.q[..., 3] - v.q[..., 0]) / t, atol=1e-9)
+    fp = v.favoured_probability([1e-6, 0.5, 1e6])  # argmax, the run's own T, uniform
+    assert fp[0] > 0.99 and abs(fp[2] - 1 / len(sweep.actions)) < 1e-6 and fp[0] > fp[1] > fp[2]
+    assert fp[1] == pytest.approx(v.boltzmann(0.5).max(-1).mean())
+    with pytest.raises(ValueError, match="temperature=0"):
+        v.boltzmann(0)
+    with pytest.raises(an.SweepError, match="no replay buffers at step 100: only the newest checkpoint keeps them; they "
+                                            "exist at steps 200"):
+        an.action_values(sweep, run, step=100)
+    with pytest.raises(KeyError, match="has no pixels; it holds actions, carry, frames, index, latents, size"):
+        sweep.restore_replay(200, keys=("pixels",))
+
+
 # ---------------------------------------------------------------------------------- figures
 
 
@@ -258,6 +293,7 @@ def test_every_figure_draws(sweep, single, tmp_path):
         lambda ax: an.plot_curiosity(single, ax, "eps"),
         lambda ax: an.plot_curiosity_groups(sweep, ax),
         lambda ax: an.plot_temperatures(sweep, ax),
+        lambda ax: an.plot_boltzmann_greediness(sweep, ax),
         lambda ax: an.plot_single_vs_multi(single, sweep, ax),
         lambda ax: an.plot_vae_single_vs_multi(single, sweep, ax),
         lambda ax: an.plot_cumulative_interactions(sweep, ax, "object"),

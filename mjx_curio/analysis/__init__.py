@@ -24,17 +24,20 @@ Figure) it is given and returning it:
     plot_interaction_frequency     figs 9, 14: contacts per object over time, 100-step bins
     plot_action_histogram          figs 10, 12: actions chosen per agent
     plot_reconstructions           figs 7, 13: real views and VAE reconstructions, early vs late
+    plot_boltzmann_greediness      how greedy softmax(q / T) is on the runs' states, over T (fig 19's why)
     plot_view_fractions            what each agent looks at over time (objects, other agent)
     plot_observational             curiosity in windows where an agent only watches the other act
     plot_losses                    the world model's training losses
     headline_table                 mean +- sd across seeds per group of the key numbers
 
 and the numbers behind them (`moving_average`, `mean_ci`, `cumulative_interactions`,
-`interaction_frequency`, `action_totals`, `observation_classes`, `reconstructions`), which the
-tests check. Loading needs only NumPy (and orbax for checkpoints); plotting needs matplotlib.
+`interaction_frequency`, `action_totals`, `observation_classes`, `reconstructions`,
+`action_values`), which the tests check. Loading needs only NumPy (and orbax for checkpoints);
+plotting needs matplotlib.
 
-The package, by job; each module imports only those above it (sweeps none; stats and recon
-sweeps; tables sweeps and stats; claims sweeps, stats and tables; figures sweeps, stats and recon):
+The package, by job; each module imports only those above it (sweeps none; stats, recon and
+action_values sweeps; tables sweeps and stats; claims sweeps, stats and tables; figures sweeps,
+stats, recon and action_values):
 
     sweeps    loading: `load`, `find_sweeps`, `load_sweeps`, `pick_single_multi`; `Sweep`, `Run`,
               `Group`, `SweepError`; the configs a sweep ran with (`learner_config`, `run_config`,
@@ -45,6 +48,9 @@ sweeps; tables sweeps and stats; claims sweeps, stats and tables; figures sweeps
               `action_totals`, `observation_classes`)
     recon     reconstructions: `reconstructions` (a run's VAE restored from its checkpoints,
               JAX) and the `Reconstructions` it returns
+    action_values  what a run's self-models predict for every action on the states of its replay
+              buffer, and the Boltzmann policy's probabilities there: `action_values` (JAX) and
+              the `ActionValues` it returns
     tables    the headline table: `headline_table` and its `Table` (Markdown, CSV)
     claims    the paper's claims tested across seeds: `claims_table` (one row per claim: statistic,
               95% CI or p-value, verdict), a `claim_*` function per claim, `assign_presets`, and the
@@ -58,6 +64,7 @@ as before.
 
 from __future__ import annotations
 
+from mjx_curio.analysis.action_values import ActionValues, action_values
 from mjx_curio.analysis.claims import (
     CLAIMS,
     ClaimResult,
@@ -102,6 +109,7 @@ from mjx_curio.analysis.figures import (
     empty_axes,
     figures_dir,
     plot_action_histogram,
+    plot_boltzmann_greediness,
     plot_cumulative_interactions,
     plot_curiosity,
     plot_curiosity_groups,
@@ -162,8 +170,8 @@ __all__ = [
     "OBS_CLASSES", "action_totals", "agent_contacts", "bin_windows", "cumulative_interactions",
     "interaction_frequency", "mean_ci", "mean_sd", "moving_average", "object_contacts", "observation_classes",
     "per_agent_vae_loss", "t_quantile_975",
-    # recon
-    "Reconstructions", "reconstructions",
+    # recon, action_values
+    "Reconstructions", "reconstructions", "ActionValues", "action_values",
     # tables
     "Table", "headline_table",
     # claims
@@ -176,8 +184,8 @@ __all__ = [
     "self_model_tracking", "t_pvalue", "watching_excess", "welch_t",
     # figures
     "AGENT_COLORS", "CURIOSITY_LABEL", "FIGURES_DIRNAME", "POLICY_COLORS", "STEPS_LABEL", "TARGET_COLORS",
-    "empty_axes", "figures_dir", "plot_action_histogram", "plot_cumulative_interactions", "plot_curiosity",
-    "plot_curiosity_groups", "plot_interaction_frequency", "plot_losses", "plot_observational",
+    "empty_axes", "figures_dir", "plot_action_histogram", "plot_boltzmann_greediness", "plot_cumulative_interactions",
+    "plot_curiosity", "plot_curiosity_groups", "plot_interaction_frequency", "plot_losses", "plot_observational",
     "plot_reconstructions", "plot_single_vs_multi", "plot_temperatures", "plot_vae_single_vs_multi",
     "plot_view_fractions", "save_figure", "save_text", "slug",
 ]

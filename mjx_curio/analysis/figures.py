@@ -14,6 +14,7 @@ from typing import Any, Iterable, Sequence
 
 import numpy as np
 
+from mjx_curio.analysis.action_values import ActionValues, action_values
 from mjx_curio.analysis.recon import Reconstructions, reconstructions
 from mjx_curio.analysis.stats import (
     OBS_CLASSES,
@@ -346,6 +347,41 @@ def plot_reconstructions(sweep: Sweep, fig, run: int | str = 0, steps: Sequence[
                  f"from the checkpoint named) encoded and decoded\nby this run's VAE restored from checkpoints at "
                  f"{' and '.join(f'{s:,}' for s in rec.steps)} agent steps", fontsize=9)
     return fig
+
+
+def plot_boltzmann_greediness(sweep: Sweep, ax, runs: Sequence[int] | None = None, temperatures=None,
+                              values: Sequence[ActionValues] | None = None):
+    """How greedy the Boltzmann policy softmax(q / T) is on each run's own states over a range of
+    T: the mean probability of the most favoured action, q from each run's self-models at the
+    newest checkpoint on the states of its replay buffer (`action_values`). Each run's own
+    temperature is marked on its curve; dashed: a uniform choice. Default runs: the Boltzmann ones,
+    or every run when there are none (the curve says what Boltzmann would do with their q)."""
+    temperatures = np.geomspace(1e-3, 10.0, 81) if temperatures is None else np.asarray(temperatures, float)
+    if values is None:
+        if runs is None:
+            runs = sweep.select(policy="boltzmann") if len(sweep.select(policy="boltzmann")) else range(sweep.n_runs)
+        values = [action_values(sweep, int(r)) for r in runs]
+    gs = [g for g in sweep.groups() if any(v.run.index in g.indices for v in values)]
+    colors = dict(zip((g.label for g in gs), _group_colors(gs)))
+    labelled = set()
+    for v in values:
+        g = next(g for g in gs if v.run.index in g.indices)
+        label = None if g.label in labelled else g.label
+        labelled.add(g.label)
+        ax.plot(temperatures, v.favoured_probability(temperatures), color=colors[g.label], lw=1.2, label=label)
+        if v.run.policy == "boltzmann":
+            ax.plot([v.run.temperature], v.favoured_probability([v.run.temperature]), "o", ms=4,
+                    color=colors[g.label])
+    ax.axhline(1 / len(sweep.actions), color="0.4", ls="--", lw=0.8, label=f"uniform (1/{len(sweep.actions)})")
+    own = [v.run.temperature for v in values if v.run.policy == "boltzmann"]
+    if own:
+        ax.axvspan(min(own), max(own), color="0.85", alpha=0.5, lw=0, label="the runs' temperatures")
+    ax.set_xscale("log")
+    ax.set_ylim(0, 1.02)
+    steps = sorted({v.step for v in values})
+    return _finish(ax, f"Boltzmann policy on the states the runs visited: how greedy softmax(q / T) is\n(self-models at "
+                       f"{' and '.join(f'{s:,}' for s in steps)} steps, each run's replay buffer; dots: the run's own T)",
+                   "temperature T (log scale)", "P(most favoured action)\n(mean over states and agents)")
 
 
 # ---------------------------------------------------------------------------------- saving
