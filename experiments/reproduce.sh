@@ -24,6 +24,7 @@
 #   multi_agent_walls_different   9 runs x 15,000 steps   59 min (38.3 run-steps/s), on another 2-core AMD
 #                                 EPYC (family 26 model 2, with AVX-512 and bf16): not comparable with the rows above
 #   the page (snapshot, figures, claims)     about 5 s
+#   temperature_evidence.py                 about 1 min
 # The temperature sweep runs 22,000 steps, as far as the page's snapshot has gone (its claim needs
 # 40,000: TEMPERATURE_STEPS=40000 continues the same sweep there).
 #
@@ -64,6 +65,7 @@ sweep boltzmann_temperatures "$TEMPERATURE_STEPS"
 sweep single_agent_walls_different "$WALL_STEPS"
 sweep multi_agent_walls_different "$WALL_STEPS"
 
+"$PY" experiments/temperature_evidence.py runs/paper/boltzmann_temperatures  # needs its newest checkpoint
 "$PY" experiments/results.py snapshot runs/paper
 "$PY" experiments/results.py page
 "$PY" experiments/results.py check

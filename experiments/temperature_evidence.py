@@ -1,0 +1,102 @@
+"""Why the Boltzmann temperatures make no difference: how far apart the self-models' predictions lie.
+
+    python experiments/temperature_evidence.py runs/paper/boltzmann_temperatures
+
+At the sweep's newest checkpoint (the one that keeps the replay buffers), every Boltzmann run's
+self-models predict the curiosity of all seven actions on every state of its replay buffer
+(`analysis.action_values`). Per run this gives the spread of those predictions (largest minus
+smallest, per state and agent) and what the Boltzmann policy softmax(q / T) makes of them: the
+probability of the most favoured action (uniform: 1/7) and the entropy relative to a uniform
+choice at the run's own temperature, and the temperature at which the favoured action would get
+half the probability. Writes docs/results/boltzmann_action_values.json (one entry per sweep and
+step, replacing an earlier entry of the same sweep and step) and
+docs/figures/boltzmann_greediness.png (`analysis.plot_boltzmann_greediness`), and prints a Markdown
+table, one row per temperature.
+"""
+
+from __future__ import annotations
+
+import json
+import pathlib
+import sys
+
+import mjx_curio  # noqa: F401  (XLA flags before JAX initialises)
+
+import numpy as np
+
+DOCS = pathlib.Path(__file__).resolve().parents[1] / "docs"
+OUT = DOCS / "results" / "boltzmann_action_values.json"
+FIGURE = DOCS / "figures" / "boltzmann_greediness.png"
+# Where to look for the temperature at which the favoured action gets half the probability.
+T_GRID = np.geomspace(1e-4, 10.0, 401)
+
+
+def _entropy_rel(p: np.ndarray) -> float:
+    """Mean over states and agents of the policy's entropy over log(n_actions)."""
+    return float((-(p * np.log(np.maximum(p, 1e-300))).sum(-1) / np.log(p.shape[-1])).mean())
+
+
+def run_figures(v) -> dict:
+    t = v.run.temperature
+    spread = v.spread()
+    favoured = v.favoured_probability(T_GRID)  # falls as T rises
+    half = T_GRID[favoured >= 0.5]
+    return {"run": v.run.name, "temperature": t, "seed": v.run.seed, "states": int(v.q.shape[0]),
+            "spread_median": float(np.median(spread)), "spread_p90": float(np.quantile(spread, 0.9)),
+            "q_mean": float(v.q.mean()), "max_prob": float(v.favoured_probability([t])[0]),
+            "entropy_rel": _entropy_rel(v.boltzmann(t)),
+            "half_mass_temperature": float(half.max()) if half.size else float("nan")}
+
+
+def evidence(path: str) -> dict:
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    from mjx_curio import analysis as an
+
+    sweep = an.load(path)
+    values = [an.action_values(sweep, int(i)) for i in sweep.select(policy="boltzmann")]
+    if not values:
+        raise SystemExit(f"{path}: no Boltzmann runs")
+    step = values[0].step
+    entry = {"sweep": sweep.name, "step": step, "uniform_prob": 1 / len(sweep.actions),
+             "runs": [run_figures(v) for v in values]}
+    saved = json.loads(OUT.read_text()) if OUT.exists() else []
+    saved = [e for e in saved if (e["sweep"], e["step"]) != (entry["sweep"], step)] + [entry]
+    OUT.parent.mkdir(parents=True, exist_ok=True)
+    OUT.write_text(json.dumps(sorted(saved, key=lambda e: (e["sweep"], e["step"])), indent=2) + "\n")
+    fig, ax = plt.subplots(figsize=(7.5, 4.2))
+    an.plot_boltzmann_greediness(sweep, ax, values=values)
+    fig.tight_layout()
+    fig.savefig(FIGURE, dpi=110)
+    print(table(entry))
+    print(f"wrote {OUT} and {FIGURE}")
+    return entry
+
+
+def table(entry: dict) -> str:
+    """Markdown: per temperature, the range over its runs of each figure."""
+    def cell(rows, key, fmt):
+        vals = [r[key] for r in rows]
+        return f"{min(vals):{fmt}}–{max(vals):{fmt}}"
+
+    lines = [f"{entry['sweep']}, step {entry['step']:,} (uniform probability {entry['uniform_prob']:.3f}); "
+             "ranges over the seeds",
+             "",
+             "| T | runs | spread of q, median | spread, 90th percentile | P(most favoured action) | entropy / uniform "
+             "| T for P = 0.5 |",
+             "| ---: | ---: | ---: | ---: | ---: | ---: | ---: |"]
+    for t in sorted({r["temperature"] for r in entry["runs"]}):
+        rows = [r for r in entry["runs"] if r["temperature"] == t]
+        lines.append(f"| {t:g} | {len(rows)} | {cell(rows, 'spread_median', '.3f')} | {cell(rows, 'spread_p90', '.3f')} "
+                     f"| {cell(rows, 'max_prob', '.3f')} | {cell(rows, 'entropy_rel', '.4f')} "
+                     f"| {cell(rows, 'half_mass_temperature', '.4f')} |")
+    return "\n".join(lines)
+
+
+if __name__ == "__main__":
+    if len(sys.argv) != 2:
+        raise SystemExit(__doc__)
+    evidence(sys.argv[1])
