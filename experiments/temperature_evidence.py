@@ -8,10 +8,13 @@ self-models predict the curiosity of all seven actions on every state of its rep
 smallest, per state and agent) and what the Boltzmann policy softmax(q / T) makes of them: the
 probability of the most favoured action (uniform: 1/7) and the entropy relative to a uniform
 choice at the run's own temperature, and the temperature at which the favoured action would get
-half the probability. Writes docs/results/boltzmann_action_values.json (one entry per sweep and
-step, replacing an earlier entry of the same sweep and step) and
-docs/figures/boltzmann_greediness.png (`analysis.plot_boltzmann_greediness`), and prints a Markdown
-table, one row per temperature.
+half the probability. From the metrics up to that step: each temperature's range of action
+shares (each action's share of the steps, mean over seeds), and how much the runs of the lowest
+and the highest temperature share when they share a seed (`analysis.seed_coupling`: windows with
+identical action counts, correlation of the curiosity curves), against runs of different seeds.
+Writes docs/results/boltzmann_action_values.json (one entry per sweep and step, replacing an
+earlier entry of the same sweep and step) and docs/figures/boltzmann_greediness.png
+(`analysis.plot_boltzmann_greediness`), and prints Markdown tables, one row per temperature.
 """
 
 from __future__ import annotations
@@ -48,6 +51,17 @@ def run_figures(v) -> dict:
             "half_mass_temperature": float(half.max()) if half.size else float("nan")}
 
 
+def metrics_figures(sweep) -> dict:
+    """Action shares per temperature and the same-seed coupling of the lowest and highest T."""
+    from mjx_curio import analysis as an
+
+    groups = sorted(sweep.groups("boltzmann"), key=lambda g: g.value)
+    shares = {f"{g.value:g}": an.action_shares(sweep, g).mean(axis=0).tolist() for g in groups}
+    return {"steps": sweep.steps_done, "action_shares": shares,
+            "coupling_temperatures": [groups[0].value, groups[-1].value],
+            "coupling": an.seed_coupling(sweep, groups[0], groups[-1])}
+
+
 def evidence(path: str) -> dict:
     import matplotlib
 
@@ -62,7 +76,7 @@ def evidence(path: str) -> dict:
         raise SystemExit(f"{path}: no Boltzmann runs")
     step = values[0].step
     entry = {"sweep": sweep.name, "step": step, "uniform_prob": 1 / len(sweep.actions),
-             "runs": [run_figures(v) for v in values]}
+             "runs": [run_figures(v) for v in values], "metrics": metrics_figures(sweep)}
     saved = json.loads(OUT.read_text()) if OUT.exists() else []
     saved = [e for e in saved if (e["sweep"], e["step"]) != (entry["sweep"], step)] + [entry]
     OUT.parent.mkdir(parents=True, exist_ok=True)
@@ -93,6 +107,22 @@ def table(entry: dict) -> str:
         lines.append(f"| {t:g} | {len(rows)} | {cell(rows, 'spread_median', '.3f')} | {cell(rows, 'spread_p90', '.3f')} "
                      f"| {cell(rows, 'max_prob', '.3f')} | {cell(rows, 'entropy_rel', '.4f')} "
                      f"| {cell(rows, 'half_mass_temperature', '.4f')} |")
+    m = entry["metrics"]
+    lines += ["", f"metrics up to step {m['steps']:,}", "",
+              "| T | action shares (mean over seeds), lowest–highest |",
+              "| ---: | ---: |"]
+    lines += [f"| {t} | {100 * min(v):.1f}–{100 * max(v):.1f} % |" for t, v in m["action_shares"].items()]
+    lo, hi = m["coupling_temperatures"]
+    c = m["coupling"]
+
+    def span(v, scale=1.0, fmt=".2f"):
+        return f"{scale * min(v):{fmt}}–{scale * max(v):{fmt}}"
+
+    same, other = c["same"], c["other"]
+    lines += ["", f"runs at T = {lo:g} against T = {hi:g}: windows with identical action counts "
+              f"{span(same['identical'], 100, '.0f')} % for the same seed, "
+              f"{span(other['identical'], 100, '.0f')} % for different seeds; curiosity curves correlate at "
+              f"r = {span(same['r'])} for the same seed, {span(other['r'])} across seeds"]
     return "\n".join(lines)
 
 

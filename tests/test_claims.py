@@ -171,6 +171,36 @@ def test_temperatures_anova_on_planted_late_curiosity():
     assert r.verdict.startswith("not testable at this scale (needs runs of >= 40,000 steps"), r.verdict
 
 
+def test_seed_coupling_on_planted_actions_and_curiosity():
+    # Two temperatures, 3 seeds, 8 windows. Each seed's action counts are its own (seed s takes
+    # action 1 on s + 1 steps a window); at T = 2.5 the second half of the windows move one step to
+    # action 2, so runs of one seed agree on exactly half the windows and runs of different seeds
+    # on none. Curiosity: rows of a Hadamard matrix per seed (zero mean, mutually orthogonal),
+    # scaled and shifted by temperature: r = 1 within a seed, 0 across seeds.
+    s = fake_sweep("boltzmann_temperatures", 2, [("boltzmann", t) for t in (0.5, 2.5)], 8, seeds=3)
+    hadamard = np.array([[1, -1, 1, -1, 1, -1, 1, -1], [1, 1, -1, -1, 1, 1, -1, -1], [1, -1, -1, 1, 1, -1, -1, 1]])
+    lo, hi = sorted(s.groups("boltzmann"), key=lambda g: g.value)
+    for g in (lo, hi):
+        for i in g.indices:
+            seed = s.runs[i].seed
+            s.metrics["action_counts"][i, :, :, 0] = 20 - (seed + 1)
+            s.metrics["action_counts"][i, :, :, 1] = seed + 1
+            s.metrics["curiosity"][i] = (0.5 + g.value * hadamard[seed])[:, None]
+    for i in hi.indices:
+        s.metrics["action_counts"][i, 4:, :, 0] -= 1
+        s.metrics["action_counts"][i, 4:, :, 2] += 1
+    c = cl.seed_coupling(s, lo, hi)
+    assert c["same"]["identical"] == [0.5, 0.5, 0.5]
+    assert c["other"]["identical"] == [0.0] * 6
+    assert c["same"]["r"] == pytest.approx([1.0] * 3)
+    assert c["other"]["r"] == pytest.approx([0.0] * 6, abs=1e-12)
+    # One agent of seed 1 acting differently in every window halves that pair's share.
+    j = hi.indices[1]
+    s.metrics["action_counts"][j, :, 1, 3] += 1
+    s.metrics["action_counts"][j, :, 1, 0] -= 1
+    assert cl.seed_coupling(s, lo, hi)["same"]["identical"] == [0.5, 0.25, 0.5]
+
+
 def test_agents_move_together_against_other_runs():
     rng = np.random.default_rng(1)
     s = fake_sweep("multi_agent", 2, POLICIES, 600, seeds=3)  # 12,000 steps

@@ -94,6 +94,7 @@ from mjx_curio.analysis.claims import (
     one_way_anova,
     pearson_r,
     running_action_baseline,
+    seed_coupling,
     self_model_tracking,
     t_pvalue,
     watching_excess,
@@ -180,7 +181,7 @@ __all__ = [
     "claim_contact_ranking", "claim_curiosity_dip_and_rise", "claim_observational_curiosity",
     "claim_prefers_moving_objects", "claim_self_model_predicts", "claim_stop_least", "claim_temperatures_alike",
     "claim_two_agents_higher", "claim_results", "claims_table", "curiosity_fall_rise", "f_pvalue", "fisher_z",
-    "late_curiosity", "moving_object_shares", "one_way_anova", "pearson_r", "running_action_baseline",
+    "late_curiosity", "moving_object_shares", "one_way_anova", "pearson_r", "running_action_baseline", "seed_coupling",
     "self_model_tracking", "t_pvalue", "watching_excess", "welch_t",
     # figures
     "AGENT_COLORS", "CURIOSITY_LABEL", "FIGURES_DIRNAME", "POLICY_COLORS", "STEPS_LABEL", "TARGET_COLORS",

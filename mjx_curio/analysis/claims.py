@@ -628,6 +628,28 @@ def late_curiosity(sweep: Sweep, fraction: float = 0.25) -> np.ndarray:
     return _nanmean(sweep.metrics["curiosity"][:, -k:].astype(float), axis=(1, 2))
 
 
+def seed_coupling(sweep: Sweep, a: Group, b: Group) -> dict:
+    """How alike two groups' runs are when they share a seed, against when they do not.
+
+    Runs of one seed draw the same random numbers, so where a policy barely depends on its setting
+    (a near-uniform Boltzmann policy at any T) they repeat much of each other's actions. For each
+    pair of runs, one from `a` and one from `b`: `identical`, the share of metrics windows in which
+    an agent's action counts are identical (mean over agents), and `r`, the Pearson correlation
+    of the two runs' curiosity curves (window means, mean over agents). Returns {"same": ...,
+    "other": ...}, each {"identical": [...], "r": [...]}, one value per pair: pairs of the same
+    seed, in seed order, and pairs of different seeds."""
+    counts = sweep.metrics["action_counts"]
+    curiosity = _nanmean(sweep.metrics["curiosity"].astype(float), axis=2)
+    out = {kind: {"identical": [], "r": []} for kind in ("same", "other")}
+    pairs = sorted(((sweep.runs[i].seed, i, j) for i in a.indices for j in b.indices),
+                   key=lambda p: (sweep.runs[p[1]].seed != sweep.runs[p[2]].seed, p))
+    for seed, i, j in pairs:
+        kind = out["same" if seed == sweep.runs[j].seed else "other"]
+        kind["identical"].append(float((counts[i] == counts[j]).all(axis=-1).mean()))
+        kind["r"].append(pearson_r(curiosity[i], curiosity[j]))
+    return out
+
+
 def claim_self_model_predicts(presets: Mapping[str, Sweep]) -> ClaimResult:
     """Claim 8: the self-model knows what will surprise it (its role, sections 3.2, 5): its
     predicted curiosity of the chosen action tracks the curiosity obtained, better as it trains
