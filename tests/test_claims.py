@@ -73,6 +73,37 @@ def test_one_way_anova_by_hand():
     assert same["F"] == pytest.approx(0.0) and same["p"] == pytest.approx(1.0)
 
 
+
+def test_block_anova_with_two_treatments_is_the_paired_t_test():
+    # Two treatments in four blocks: the differences 1, 2, 2, 1 have mean 1.5 and standard deviation
+    # sqrt(1/3), so the paired t = 1.5 / (sqrt(1/3) / 2) = sqrt(27) on 3 degrees of freedom, and the
+    # blocked F on (1, 3) degrees of freedom is t^2 = 27 with the same p-value.
+    y = np.array([[1.0, 2, 3, 4], [2, 4, 5, 5]])
+    b = cl.block_anova(y)
+    assert b["F"] == pytest.approx(27.0) and (b["df1"], b["df2"], b["b"]) == (1, 3, 4)
+    assert b["p"] == pytest.approx(cl.t_pvalue(math.sqrt(27.0), 3))
+    try:  # an independent implementation where one is installed (scipy is not a dependency)
+        from scipy import stats as sps
+    except ImportError:
+        return
+    assert b["p"] == pytest.approx(sps.ttest_rel(y[0], y[1]).pvalue, rel=1e-8)
+
+
+def test_block_anova_removes_block_levels_that_the_one_way_test_counts_as_error():
+    rng = np.random.default_rng(0)
+    y = 0.1 * np.arange(3.0)[:, None] + rng.normal(0, 0.01, (3, 5))  # three treatments, five blocks
+    offsets = np.array([0.0, 3.0, -2.0, 5.0, 1.0])  # each block's own level, shared by its treatments
+    plain, shifted = cl.block_anova(y), cl.block_anova(y + offsets)
+    assert shifted["F"] == pytest.approx(plain["F"]) and shifted["p"] < 1e-6
+    assert shifted["block_share"] > 0.99
+    assert cl.one_way_anova(list(y + offsets))["p"] > 0.5  # the offsets drown the effect in the error term
+    # A block with a missing value is left out; an exactly additive table has no residual.
+    gappy = np.concatenate([y, [[np.nan], [0.0], [0.0]]], axis=1)
+    assert cl.block_anova(gappy)["F"] == pytest.approx(plain["F"]) and cl.block_anova(gappy)["b"] == 5
+    exact = cl.block_anova(np.arange(3.0)[:, None] + offsets)
+    assert exact["F"] == math.inf and exact["p"] == 0.0
+    assert math.isnan(cl.block_anova(y[:, :1])["p"])
+
 def test_pearson_r_known_values():
     x = np.arange(10.0)
     assert cl.pearson_r(x, 3 * x + 1) == pytest.approx(1.0)
@@ -166,6 +197,14 @@ def test_temperatures_anova_on_planted_late_curiosity():
     s.metrics["curiosity"][:, 1500:, :] = np.array([1, 2, 3, 2, 1, 3, 3, 2, 1], float)[:, None, None]
     r = cl.claim_temperatures_alike({"boltzmann_temperatures": s})
     assert r.values["F"] == pytest.approx(0.0) and r.verdict.startswith("holds"), r.verdict
+    # Each seed at its own level, the temperatures 0.01 apart within every seed: the one-way test
+    # sees no difference, the test blocked by seed does, and it sets the verdict.
+    for t, g in enumerate(sorted(s.groups("boltzmann"), key=lambda g: g.value)):
+        for i in g.indices:
+            s.metrics["curiosity"][i, 1500:, :] = s.runs[i].seed + 0.01 * t + 0.001 * (s.runs[i].seed == t)
+    r = cl.claim_temperatures_alike({"boltzmann_temperatures": s})
+    assert r.values["p"] > 0.5 and r.values["p_blocked"] < 0.05, r.values
+    assert r.verdict.startswith("does not hold") and "blocked by seed (3 seeds" in r.statistic, r.verdict
     short = fake_sweep("boltzmann_temperatures", 2, [("boltzmann", t) for t in (0.5, 1.5)], 100, seeds=2)
     r = cl.claim_temperatures_alike({"boltzmann_temperatures": short})
     assert r.verdict.startswith("not testable at this scale (needs runs of >= 40,000 steps"), r.verdict

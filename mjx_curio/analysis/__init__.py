@@ -54,7 +54,7 @@ stats, recon and action_values):
     tables    the headline table: `headline_table` and its `Table` (Markdown, CSV)
     claims    the paper's claims tested across seeds: `claims_table` (one row per claim: statistic,
               95% CI or p-value, verdict), a `claim_*` function per claim, `assign_presets`, and the
-              NumPy tests they use (`welch_t`, `one_way_anova`, `t_pvalue`, `f_pvalue`, `betainc`)
+              NumPy tests they use (`welch_t`, `one_way_anova`, `block_anova`, `t_pvalue`, `f_pvalue`, `betainc`)
     figures   every `plot_*` function, the colours and labels they share, and saving
               (`figures_dir`, `save_figure`, `save_text`, `empty_axes`, `slug`)
 
@@ -74,6 +74,7 @@ from mjx_curio.analysis.claims import (
     assign_presets,
     balanced_rotation_share,
     betainc,
+    block_anova,
     claim_agents_move_together,
     claim_boltzmann_trembles,
     claim_contact_ranking,
@@ -177,7 +178,7 @@ __all__ = [
     "Table", "headline_table",
     # claims
     "CLAIMS", "ClaimResult", "VERDICTS", "action_shares", "agent_curiosity_coupling", "assign_presets",
-    "balanced_rotation_share", "betainc", "claim_agents_move_together", "claim_boltzmann_trembles",
+    "balanced_rotation_share", "betainc", "block_anova", "claim_agents_move_together", "claim_boltzmann_trembles",
     "claim_contact_ranking", "claim_curiosity_dip_and_rise", "claim_observational_curiosity",
     "claim_prefers_moving_objects", "claim_self_model_predicts", "claim_stop_least", "claim_temperatures_alike",
     "claim_two_agents_higher", "claim_results", "claims_table", "curiosity_fall_rise", "f_pvalue", "fisher_z",

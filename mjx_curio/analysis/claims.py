@@ -157,6 +157,40 @@ def one_way_anova(groups: Sequence) -> dict:
     return out
 
 
+def block_anova(table) -> dict:
+    """Two-way ANOVA without interaction on a [treatments, blocks] table, one value a cell: the
+    treatment effect tested after removing each block's own level (a randomized complete block
+    design). Runs of one seed share their random numbers, so a seed is a block; removing its level
+    takes the variance the runs of one seed share out of the error term. Blocks with a NaN are
+    left out. {"F", "df1", "df2", "p", "eta2" (treatment share of the sum of squares left after
+    the blocks'), "block_share" (the blocks' share of the total), "k", "b"}. NaN where fewer than
+    2 treatments or 2 blocks or no spread; F = inf, p = 0 where the residual is exactly 0 but the
+    treatments differ."""
+    y = np.asarray(table, float)
+    y = y[:, np.isfinite(y).all(axis=0)]
+    k, b = y.shape
+    out = {"F": math.nan, "df1": k - 1, "df2": (k - 1) * (b - 1), "p": math.nan, "eta2": math.nan,
+           "block_share": math.nan, "k": k, "b": b}
+    if k < 2 or b < 2:
+        return out
+    grand = y.mean()
+    ss_treat = b * ((y.mean(axis=1) - grand) ** 2).sum()
+    ss_block = k * ((y.mean(axis=0) - grand) ** 2).sum()
+    ss_total = ((y - grand) ** 2).sum()
+    ss_error = max(ss_total - ss_treat - ss_block, 0.0)
+    if ss_total <= 0:
+        return out
+    out["block_share"] = float(ss_block / ss_total)
+    out["eta2"] = float(ss_treat / (ss_treat + ss_error)) if ss_treat + ss_error > 0 else math.nan
+    # The residual of an exactly additive table is 0 up to rounding of the sums above.
+    if ss_error <= 1e-12 * ss_total:
+        if ss_treat > 1e-12 * ss_total:
+            out.update(F=math.inf, p=0.0)
+        return out
+    f = (ss_treat / out["df1"]) / (ss_error / out["df2"])
+    out.update(F=float(f), p=f_pvalue(f, out["df1"], out["df2"]))
+    return out
+
 def pearson_r(x, y) -> float:
     """Pearson correlation over the positions where both are finite; NaN below 3 or with no spread."""
     x, y = np.asarray(x, float), np.asarray(y, float)
@@ -590,8 +624,12 @@ def claim_temperatures_alike(presets: Mapping[str, Sweep]) -> ClaimResult:
 
     Measured on boltzmann_temperatures, per run: the late curiosity = mean over the last quarter
     of the run (after the initial drop, where fig. 19's curves converge), averaged over the agents.
-    One-way ANOVA across the temperature groups (F test; p from the F distribution), with eta^2.
-    Verdict: holds if p >= 0.05 (no significant difference, the paper's claim; with 8 seeds a
+    One-way ANOVA across the temperature groups (F test; p from the F distribution), with eta^2,
+    and the same test blocked by seed (`block_anova` on the seeds every temperature ran): runs of
+    one seed draw the same random numbers and, with a near-uniform policy, share much of their
+    course (`seed_coupling`), so they are not independent samples and the one-way test's error term
+    holds the seeds' variance. Verdict, from the blocked test where it is defined (else the
+    one-way): holds if p >= 0.05 (no significant difference, the paper's claim; with few seeds a
     temperature, only a sizeable effect would be detected), does not hold if p < 0.05. Scale: >= 2
     temperatures, runs of >= 40,000 steps, >= MIN_SEEDS seeds a temperature.
     """
@@ -603,11 +641,21 @@ def claim_temperatures_alike(presets: Mapping[str, Sweep]) -> ClaimResult:
     gs = sorted(s.groups("boltzmann"), key=lambda g: g.value)
     late = late_curiosity(s)
     a = one_way_anova([late[g.indices] for g in gs])
+    seeds = sorted(set.intersection(*(set(s.runs[i].seed for i in g.indices) for g in gs))) if gs else []
+    by_seed = [{s.runs[i].seed: late[i] for i in g.indices} for g in gs]
+    blocked = block_anova([[row[seed] for seed in seeds] for row in by_seed])
     cells = [f"T={g.value:g} {_ci(mean_ci(late[g.indices]))}" for g in gs]
-    values = {"F": _num(a["F"]), "p": _num(a["p"]), "eta2": _num(a["eta2"]), "df1": a["df1"], "df2": a["df2"]}
+    values = {"F": _num(a["F"]), "p": _num(a["p"]), "eta2": _num(a["eta2"]), "df1": a["df1"], "df2": a["df2"],
+              "F_blocked": _num(blocked["F"]), "p_blocked": _num(blocked["p"]), "df2_blocked": blocked["df2"],
+              "seed_share": _num(blocked["block_share"])}
     values.update({f"T={g.value:g}": _num(np.nanmean(late[g.indices])) for g in gs})
     stat = (f"{s.name}: late curiosity (last quarter of the run) per temperature: {', '.join(cells)}; one-way ANOVA "
             f"F({a['df1']}, {a['df2']})={_f(a['F'])}, p={_p(a['p'])}, eta²={_f(a['eta2'])}")
+    use_blocked = math.isfinite(blocked["p"])
+    if use_blocked:
+        stat += (f"; blocked by seed ({blocked['b']} seeds, {_f(100 * blocked['block_share'], 2)} % of the variance) "
+                 f"F({blocked['df1']}, {blocked['df2']})={_f(blocked['F'])}, p={_p(blocked['p'])}")
+    p = blocked["p"] if use_blocked else a["p"]
     gaps = []
     if len(gs) < 2:
         gaps.append(f">= 2 temperatures; {s.name} has {len(gs)}")
@@ -616,9 +664,9 @@ def claim_temperatures_alike(presets: Mapping[str, Sweep]) -> ClaimResult:
         gaps.append(gap)
     if gaps:
         return ClaimResult(key, claim, evidence, stat, f"not testable at this scale (needs {'; '.join(gaps)})", values)
-    if not np.isfinite(a["p"]):
+    if not np.isfinite(p):
         return ClaimResult(key, claim, evidence, stat, "not testable: the ANOVA is undefined (no spread)", values)
-    verdict = "holds" if a["p"] >= ALPHA else f"does not hold: the temperatures differ (p={_p(a['p'])})"
+    verdict = "holds" if p >= ALPHA else f"does not hold: the temperatures differ (p={_p(p)})"
     return ClaimResult(key, claim, evidence, stat, verdict, values)
 
 
