@@ -2,7 +2,7 @@
 # Remake every sweep and figure of docs/results.md from nothing.
 #
 #     bash experiments/reproduce.sh      # the scale of docs/results.md: 3 seeds; 40,000 steps a run
-#                                        # with one or two agents, 22,000 for temperatures,
+#                                        # with one or two agents and for the temperatures,
 #                                        # 15,000 for the wall variants
 #     SEEDS=8 STEPS=80000 bash experiments/reproduce.sh
 #                                        # the paper's full scale (see below)
@@ -19,14 +19,12 @@
 # time, measured from the sweeps' own progress lines (run-steps/s = runs x steps per second):
 #   multi_agent    9 runs x 40,000 steps   5 h 51 min (steps 500-15,000 in 2 h 21 min at 15.5 run-steps/s, 15,000-20,000 in 40 min at 18.7, 20,000-40,000 in 2 h 46 min at 18.1)
 #   single_agent   9 runs x 40,000 steps   3 h 16 min (1 h 14 min to 15,000 steps, then 15,000-40,000 in 2 h 2 min at 30.8 run-steps/s)
-#   boltzmann_temperatures  15 runs x 22,000 steps   5 h 4 min (4,000 steps in 54 min at 18.6 run-steps/s, 4,000-14,000 in 2 h 18 min at 18.1, 14,000-22,000 in 1 h 52 min at 16.3 then 18.5)
+#   boltzmann_temperatures  15 runs x 40,000 steps   9 h 5 min (7,000 steps in 1 h 57 min at 15.3 run-steps/s, 7,000-26,000 in 4 h 22 min at 18.1, 26,000-40,000 in 2 h 47 min at 21.0)
 #   single_agent_walls_different  3 runs x 15,000 steps   30 min (25.9 run-steps/s)
 #   multi_agent_walls_different   9 runs x 15,000 steps   59 min (38.3 run-steps/s), on another 2-core AMD
 #                                 EPYC (family 26 model 2, with AVX-512 and bf16): not comparable with the rows above
 #   the page (snapshot, figures, claims)     about 5 s
 #   temperature_evidence.py                 about 1 min
-# The temperature sweep runs 22,000 steps, as far as the page's snapshot has gone (its claim needs
-# 40,000: TEMPERATURE_STEPS=40000 continues the same sweep there).
 #
 # The paper's full scale (8 seeds, 80,000 steps, every preset) is a GPU job: install the CUDA
 # extra (pip install -e '.[cuda]') and run
@@ -39,7 +37,7 @@ SEEDS=${SEEDS:-3}
 STEPS=${STEPS:-}
 MULTI_STEPS=${MULTI_STEPS:-${STEPS:-40000}}
 SINGLE_STEPS=${SINGLE_STEPS:-${STEPS:-40000}}
-TEMPERATURE_STEPS=${TEMPERATURE_STEPS:-${STEPS:-22000}}
+TEMPERATURE_STEPS=${TEMPERATURE_STEPS:-${STEPS:-40000}}
 WALL_STEPS=${WALL_STEPS:-${STEPS:-15000}}
 # Bad settings stop here, before any sweep starts (a sweep advances in chunks of 100 steps).
 for knob in SEEDS STEPS MULTI_STEPS SINGLE_STEPS TEMPERATURE_STEPS WALL_STEPS; do

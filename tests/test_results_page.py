@@ -181,7 +181,7 @@ def test_reproduce_refuses_bad_settings_before_any_sweep(setting, message):
 
 
 @pytest.mark.parametrize("settings, want", [
-    ({}, {"multi_agent": 40000, "single_agent": 40000, "boltzmann_temperatures": 22000,
+    ({}, {"multi_agent": 40000, "single_agent": 40000, "boltzmann_temperatures": 40000,
           "single_agent_walls_different": 15000, "multi_agent_walls_different": 15000}),
     ({"STEPS": "80000", "SINGLE_STEPS": "30000"},
      {"multi_agent": 80000, "single_agent": 30000, "boltzmann_temperatures": 80000,
