@@ -300,6 +300,19 @@ def _figures() -> tuple[Figure, ...]:
                "across seeds. A uniform choice would give each action 1/7 of the steps. Paper: fig. 19 shows only "
                "curiosity.",
                _policy_panels("boltzmann_temperatures", an.plot_action_histogram, height=2.4)),
+        Figure("boltzmann_low_temperatures", ("boltzmann_low_temperatures",),
+               "Boltzmann at low temperatures, T = 0.005 to 0.05, where its softmax starts to favour the actions "
+               "its self-models predict most surprising, two agents: curiosity reward (squared latent distance, "
+               "unitless; mean of both agents), moving average over 1,000 steps, mean over {seeds} seeds with 95 % "
+               "confidence bands. x: agent steps. Not in the paper (its fig. 19 has T = 0.5 to 2.5).",
+               _one(lambda p, ax: an.plot_temperatures(p["boltzmann_low_temperatures"], ax), size=(9.5, 3.8))),
+        Figure("boltzmann_low_temperatures_actions", ("boltzmann_low_temperatures",),
+               "How often each agent chose each action over the whole run under the Boltzmann policy at low "
+               "temperatures, one panel per temperature T (0.005 at the top to 0.05 at the bottom), two agents. x: "
+               "the seven actions; y: number of agent steps the action was chosen, mean over {seeds} seeds, error "
+               "bars 95 % confidence intervals across seeds. A uniform choice would give each action 1/7 of the "
+               "steps. Not in the paper.",
+               _policy_panels("boltzmann_low_temperatures", an.plot_action_histogram, height=2.4)),
     )
 
 

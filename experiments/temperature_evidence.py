@@ -13,8 +13,9 @@ shares (each action's share of the steps, mean over seeds), and how much the run
 and the highest temperature share when they share a seed (`analysis.seed_coupling`: windows with
 identical action counts, correlation of the curiosity curves), against runs of different seeds.
 Writes docs/results/boltzmann_action_values.json (one entry per sweep and step, replacing an
-earlier entry of the same sweep and step) and docs/figures/boltzmann_greediness.png
-(`analysis.plot_boltzmann_greediness`), and prints Markdown tables, one row per temperature.
+earlier entry of the same sweep and step) and docs/figures/<sweep>_greediness.png
+(`analysis.plot_boltzmann_greediness`; one figure a sweep, so the paper's temperatures and the low
+ones keep theirs), and prints Markdown tables, one row per temperature.
 """
 
 from __future__ import annotations
@@ -29,7 +30,7 @@ import numpy as np
 
 DOCS = pathlib.Path(__file__).resolve().parents[1] / "docs"
 OUT = DOCS / "results" / "boltzmann_action_values.json"
-FIGURE = DOCS / "figures" / "boltzmann_greediness.png"
+FIGURES = DOCS / "figures"
 # Where to look for the temperature at which the favoured action gets half the probability.
 T_GRID = np.geomspace(1e-4, 10.0, 401)
 
@@ -84,9 +85,10 @@ def evidence(path: str) -> dict:
     fig, ax = plt.subplots(figsize=(7.5, 4.2))
     an.plot_boltzmann_greediness(sweep, ax, values=values)
     fig.tight_layout()
-    fig.savefig(FIGURE, dpi=110)
+    figure = FIGURES / f"{sweep.name}_greediness.png"
+    fig.savefig(figure, dpi=110)
     print(table(entry))
-    print(f"wrote {OUT} and {FIGURE}")
+    print(f"wrote {OUT} and {figure}")
     return entry
 
 

@@ -150,6 +150,15 @@ def test_assign_presets_by_settings_name_and_manifest():
                    "boltzmann_temperatures": multi}
     # A dict key naming a preset wins over the settings.
     assert cl.assign_presets({"multi_agent_walls_different": multi}) == {"multi_agent_walls_different": multi}
+    # Temperatures below 0.5 stand for the low-temperature preset, not the paper's; a recorded preset
+    # wins over a name that sorts first.
+    low = fake_sweep("low", 2, [("boltzmann", t) for t in (0.005, 0.05)], 4)
+    got = cl.assign_presets([low])
+    assert got["boltzmann_low_temperatures"] is low and "boltzmann_temperatures" not in got
+    paper = fake_sweep("b", 2, [("boltzmann", t) for t in (0.5, 2.5)], 4, preset="boltzmann_temperatures")
+    low_named = fake_sweep("a", 2, [("boltzmann", t) for t in (0.005, 0.05)], 4, preset="boltzmann_low_temperatures")
+    assert cl.assign_presets([low_named, paper]) == {"boltzmann_temperatures": paper,
+                                                     "boltzmann_low_temperatures": low_named}
 
 
 def test_missing_presets_make_every_row_not_testable_with_the_name():

@@ -61,7 +61,11 @@ PRESET_SETTINGS = {
     "single_agent_walls_different": dict(agents=1, walls="different", policies=("eps",)),
     "multi_agent": dict(agents=2, walls="same", policies=("eps", "boltzmann", "ucb")),
     "multi_agent_walls_different": dict(agents=2, walls="different", policies=("eps", "boltzmann", "ucb")),
-    "boltzmann_temperatures": dict(agents=2, walls="same", policies=("boltzmann",), temperatures=2),
+    "boltzmann_temperatures": dict(agents=2, walls="same", policies=("boltzmann",), temperatures=2,
+                                   temperature_range=(0.5, math.inf)),
+    # Not the paper's: the temperatures where the policy's softmax starts to favour actions.
+    "boltzmann_low_temperatures": dict(agents=2, walls="same", policies=("boltzmann",), temperatures=2,
+                                       temperature_range=(0.0, 0.5)),
 }
 # The paper's setting of each policy, used where a sweep holds several (the sweep's defaults).
 PAPER_SETTING = {"eps": 0.2, "boltzmann": 1.5, "ucb": 1.0}
@@ -215,7 +219,8 @@ def assign_presets(sweeps) -> dict[str, Sweep]:
     Sweeps, or a dict {name: Sweep}. A sweep serves a preset when, in this order: its manifest
     records that `preset`; its name (dict key, else directory name) is the preset's; or its settings
     fit the preset (same number of agents and walls, at least one of its policies, and for
-    `boltzmann_temperatures` at least 2 temperatures). A sweep named after or made by one preset
+    `boltzmann_temperatures` at least 2 temperatures, all >= 0.5; for `boltzmann_low_temperatures`
+    all below 0.5). A sweep named after or made by one preset
     serves only that one; the first fitting sweep wins."""
     if isinstance(sweeps, (str, pathlib.Path)):
         sweeps = load_sweeps(sweeps)
@@ -245,7 +250,9 @@ def _fits(s: Sweep, want: dict) -> bool:
     policies = {r.policy for r in s.runs}
     if not policies & set(want["policies"]):
         return False
-    return len(s.groups("boltzmann")) >= want.get("temperatures", 0)
+    temperatures = [g.value for g in s.groups("boltzmann")]
+    lo, hi = want.get("temperature_range", (-math.inf, math.inf))
+    return len(temperatures) >= want.get("temperatures", 0) and all(lo <= t < hi for t in temperatures)
 
 
 # ------------------------------------------------------------------------------------ the claims
