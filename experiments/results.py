@@ -13,12 +13,13 @@ alone. It never replaces a snapshot with a different sweep or with one that has 
 `page` loads those snapshots, draws the figures with the notebook's own functions
 (`mjx_curio.analysis.plot_*`) into docs/figures/results/, and rewrites the generated blocks of
 docs/results.md (between `<!-- generated: NAME -->` and `<!-- end: NAME -->`): the scale of the
-sweeps, the figures with their captions, and the claims table (`analysis.claims_table`); the rest
+sweeps, the figures with their captions, the claims table (`analysis.claims_table`) and the
+Boltzmann temperatures measure by measure (`analysis.temperature_table`); the rest
 of the page (what the verdicts mean, why a claim may fail here) is prose and stays as written.
 The claims' numbers also go to docs/results/claims.csv.
 
-`check` recomputes the scale and claims blocks from the snapshots and exits 1 if they differ from
-the page (the test suite does the same).
+`check` recomputes the scale, claims and temperatures blocks from the snapshots and exits 1 if
+they differ from the page (the test suite does the same).
 """
 
 from __future__ import annotations
@@ -131,6 +132,19 @@ def scale_block(presets: dict) -> str:
     missing = [p for p in _preset_names() if p not in presets]
     tail = f"\nNo snapshot yet of: {', '.join(f'`{p}`' for p in missing)}.\n" if missing else "\n"
     return "\n".join(rows) + "\n" + tail
+
+
+# The Boltzmann sweeps whose temperatures the page compares measure by measure.
+TEMPERATURE_PRESETS = ("boltzmann_temperatures", "boltzmann_low_temperatures")
+
+
+def temperatures_block(presets: dict) -> str:
+    """Per Boltzmann temperature sweep snapshotted, `analysis.temperature_table`."""
+    from mjx_curio import analysis as an
+
+    parts = [f"`{name}`:\n\n{an.temperature_table(presets[name]).to_markdown()}"
+             for name in TEMPERATURE_PRESETS if name in presets]
+    return "\n".join(parts) if parts else "No Boltzmann temperature sweep has been snapshotted yet.\n"
 
 
 def claims_block(presets: dict) -> str:
@@ -372,7 +386,7 @@ def fill(page: str, new: dict[str, str]) -> str:
 
 def computed_blocks(presets: dict) -> dict[str, str]:
     """The blocks that are pure functions of the snapshots' metrics (what `check` compares)."""
-    return {"scale": scale_block(presets), "claims": claims_block(presets)}
+    return {"scale": scale_block(presets), "claims": claims_block(presets), "temperatures": temperatures_block(presets)}
 
 
 def write_page(src: pathlib.Path = SNAPSHOTS) -> None:

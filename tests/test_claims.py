@@ -219,6 +219,40 @@ def test_temperatures_anova_on_planted_late_curiosity():
     assert r.verdict.startswith("not testable at this scale (needs runs of >= 40,000 steps"), r.verdict
 
 
+
+def test_temperature_table_on_planted_runs():
+    # Three temperatures, 3 seeds, 10 windows of 14 steps, two agents. Actions: at T = 0.01 one
+    # action only (entropy 0, top share 1), at T = 0.1 every action twice a window (entropy 1, top
+    # share 1/7), at T = 1 two actions 7 times each (entropy ln 2 / ln 7, top share 1/2). Object
+    # contacts: run i touches on i + 1 steps of its first window, per agent.
+    s = fake_sweep("boltzmann_low_temperatures", 2, [("boltzmann", t) for t in (0.01, 0.1, 1.0)], 10, seeds=3,
+                   every=14)
+    ac = s.metrics["action_counts"]
+    ac[:] = 0
+    ac[0:3, ..., 0] = 14
+    ac[3:6] = 2
+    ac[6:9, ..., 0] = ac[6:9, ..., 1] = 7
+    for i in range(9):
+        s.metrics["contact_object"][i, 0, :, 0] = i + 1
+    late = np.array([1.0, 2, 3, 2, 3, 4, 3, 4, 6])  # per run; seed s adds s, T adds its index
+    s.metrics["curiosity"][:] = 9.0
+    s.metrics["curiosity"][:, -3:, :] = late[:, None, None]  # the last quarter of 10 windows: 3
+    t = an.temperature_table(s)
+    assert [r[0] for r in t.rows] == ["0.01", "0.1", "1", "across T, blocked by seed"]
+    v = t.values
+    assert [r["action_entropy"] for r in v[:3]] == pytest.approx([0.0, 1.0, math.log(2) / math.log(7)])
+    assert [r["top_share"] for r in v[:3]] == pytest.approx([1.0, 1 / 7, 0.5])
+    per_run = 1000 * 2 * (np.arange(9) + 1) / (10 * 14 * 2)  # both agents touch; 280 agent-steps a run
+    assert [r["object_contacts"] for r in v[:3]] == pytest.approx(per_run.reshape(3, 3).mean(axis=1))
+    assert [r["late_curiosity"] for r in v[:3]] == pytest.approx(late.reshape(3, 3).mean(axis=1))
+    want = cl.block_anova(late.reshape(3, 3))
+    assert (v[3]["late_curiosity F"], v[3]["late_curiosity p"]) == (pytest.approx(want["F"]), pytest.approx(want["p"]))
+    assert t.rows[3][2] == f"F(2, 4) = {want['F']:.3g}, p = {want['p']:.3g}" and t.rows[3][1] == "3 seeds"
+    assert len({tuple(r) for r in v}) == 1  # every row has the same keys: the CSV can be written
+    assert t.to_csv().count("\n") == 5
+    with pytest.raises(an.SweepError, match="no Boltzmann runs"):
+        an.temperature_table(fake_sweep("eps", 2, [("eps", 0.2)], 4))
+
 def test_seed_coupling_on_planted_actions_and_curiosity():
     # Two temperatures, 3 seeds, 8 windows. Each seed's action counts are its own (seed s takes
     # action 1 on s + 1 steps a window); at T = 2.5 the second half of the windows move one step to

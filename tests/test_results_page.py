@@ -39,7 +39,7 @@ def test_the_page_is_what_the_committed_metrics_give(results):
     presets = results.load_presets()
     page = results.PAGE.read_text()
     blocks = results.blocks(page)
-    assert set(blocks) == {"scale", "figures", "claims"}
+    assert set(blocks) == {"scale", "figures", "claims", "temperatures"}
     assert blocks["figures"] == results.figures_block(presets, out=None)
     if presets:  # the CSV's full-precision numbers may differ in the last bit on another CPU's NumPy
         _assert_same_csv(results.CLAIMS_CSV.read_text(), an.claims_table(presets).to_csv())
@@ -146,10 +146,14 @@ def test_page_blocks_on_the_tiny_sweeps(results, tiny_sweeps_dir, tmp_path):
     assert drawn == sorted(f.name for f in results._figures() if set(f.needs) <= set(presets))
     assert len(drawn) == 9 and figures.count("![") == 9
     # The temperature and wall figures too, the tiny sweeps of matching agent count standing in.
+    assert results.temperatures_block(presets).startswith("No Boltzmann temperature sweep")
     presets["boltzmann_temperatures"] = presets["multi_agent_walls_different"] = presets["multi_agent"]
+    presets["boltzmann_low_temperatures"] = presets["multi_agent"]
     presets["single_agent_walls_different"] = presets["single_agent"]
     results.figures_block(presets, out=tmp_path / "all")
-    assert len(list((tmp_path / "all").glob("*.png"))) == len(results._figures()) == 13
+    assert len(list((tmp_path / "all").glob("*.png"))) == len(results._figures()) == 15
+    temperatures = results.temperatures_block(presets)
+    assert temperatures.count("| across T, blocked by seed |") == 2 and "`boltzmann_low_temperatures`:" in temperatures
 
 
 def test_bad_command_lines_are_messages_not_tracebacks(results, tmp_path, capsys):

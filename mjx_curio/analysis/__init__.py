@@ -29,6 +29,8 @@ Figure) it is given and returning it:
     plot_observational             curiosity in windows where an agent only watches the other act
     plot_losses                    the world model's training losses
     headline_table                 mean +- sd across seeds per group of the key numbers
+    temperature_table              per Boltzmann temperature: curiosity, action entropy, contacts;
+                                   each tested across T, blocked by seed
 
 and the numbers behind them (`moving_average`, `mean_ci`, `cumulative_interactions`,
 `interaction_frequency`, `action_totals`, `observation_classes`, `reconstructions`,
@@ -36,8 +38,8 @@ and the numbers behind them (`moving_average`, `mean_ci`, `cumulative_interactio
 plotting needs matplotlib.
 
 The package, by job; each module imports only those above it (sweeps none; stats, recon and
-action_values sweeps; tables sweeps and stats; claims sweeps, stats and tables; figures sweeps,
-stats, recon and action_values):
+action_values sweeps; tables sweeps and stats; claims sweeps, stats and tables; temperatures
+claims, stats and tables; figures sweeps, stats, recon and action_values):
 
     sweeps    loading: `load`, `find_sweeps`, `load_sweeps`, `pick_single_multi`; `Sweep`, `Run`,
               `Group`, `SweepError`; the configs a sweep ran with (`learner_config`, `run_config`,
@@ -55,6 +57,8 @@ stats, recon and action_values):
     claims    the paper's claims tested across seeds: `claims_table` (one row per claim: statistic,
               95% CI or p-value, verdict), a `claim_*` function per claim, `assign_presets`, and the
               NumPy tests they use (`welch_t`, `one_way_anova`, `block_anova`, `t_pvalue`, `f_pvalue`, `betainc`)
+    temperatures  what a Boltzmann sweep's temperatures change, run by run: `temperature_table`
+              and the `temperature_measures` behind it
     figures   every `plot_*` function, the colours and labels they share, and saving
               (`figures_dir`, `save_figure`, `save_text`, `empty_axes`, `slug`)
 
@@ -163,6 +167,7 @@ from mjx_curio.analysis.sweeps import (
     run_specs,
 )
 from mjx_curio.analysis.tables import Table, headline_table
+from mjx_curio.analysis.temperatures import temperature_measures, temperature_table
 
 __all__ = [
     # sweeps
@@ -176,6 +181,8 @@ __all__ = [
     "Reconstructions", "reconstructions", "ActionValues", "action_values",
     # tables
     "Table", "headline_table",
+    # temperatures
+    "temperature_measures", "temperature_table",
     # claims
     "CLAIMS", "ClaimResult", "VERDICTS", "action_shares", "agent_curiosity_coupling", "assign_presets",
     "balanced_rotation_share", "betainc", "block_anova", "claim_agents_move_together", "claim_boltzmann_trembles",

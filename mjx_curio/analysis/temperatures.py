@@ -1,0 +1,83 @@
+"""What a Boltzmann sweep's temperatures change: one row per temperature T of what its runs did,
+and a last row testing each measure across T, blocked by seed (`temperature_table`).
+
+Runs of one seed draw the same random numbers, and where the policy is near-uniform they repeat
+much of each other's course at every T (`claims.seed_coupling`), so each measure's test across T
+removes each seed's own level first (`claims.block_anova`). Imports `claims`, `stats`, `tables`.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from mjx_curio.analysis.claims import block_anova, late_curiosity
+from mjx_curio.analysis.stats import mean_ci, object_contacts
+from mjx_curio.analysis.sweeps import Sweep, SweepError
+from mjx_curio.analysis.tables import Table
+
+# (key, column heading, format): the measures, each one number a run. The action measures sit
+# close to a uniform choice's (1 and 1/7) at the paper's temperatures, so they keep more digits.
+MEASURES = (
+    ("late_curiosity", "late curiosity (last quarter)", ".3g"),
+    ("action_entropy", "action entropy / ln 7", ".5f"),
+    ("top_share", "most chosen action's share", ".4f"),
+    ("object_contacts", "object contacts per 1,000 agent-steps", ".3g"),
+)
+
+
+def temperature_measures(sweep: Sweep, late_fraction: float = 0.25) -> dict[str, np.ndarray]:
+    """{measure: [runs]} for every run of the sweep. `late_curiosity`: mean curiosity over the last
+    `late_fraction` of the windows, mean of the agents (claim 7's statistic). From the whole run,
+    agents pooled: `action_entropy`, the entropy of the action shares over ln(number of actions)
+    (1: every action equally often); `top_share`, the most chosen action's share of the steps;
+    `object_contacts`, agent-object contact steps (summed over agents and objects) per 1,000
+    agent-steps."""
+    counts = sweep.metrics["action_counts"].astype(float).sum(axis=(1, 2))  # [runs, actions]
+    shares = counts / np.maximum(counts.sum(axis=1, keepdims=True), 1)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        plogp = np.where(shares > 0, shares * np.log(shares), 0.0)
+    agent_steps = sweep.metrics["steps_taken"].astype(float).sum(axis=1) * sweep.n_agents
+    return {
+        "late_curiosity": late_curiosity(sweep, late_fraction),
+        "action_entropy": -plogp.sum(axis=1) / math.log(shares.shape[1]),
+        "top_share": shares.max(axis=1),
+        "object_contacts": 1000 * object_contacts(sweep).astype(float).sum(axis=1) / np.maximum(agent_steps, 1),
+    }
+
+
+def temperature_table(sweep: Sweep, late_fraction: float = 0.25) -> Table:
+    """Per Boltzmann temperature (ascending): each measure's mean and 95 % CI across seeds; last
+    row: for each measure, the ANOVA across temperatures blocked by seed, on the seeds that every
+    temperature ran. `values` has the same keys in every row (NaN where a row has no such number):
+    per measure its mean, low, high, F and p."""
+    groups = sorted(sweep.groups("boltzmann"), key=lambda g: g.value)
+    if not groups:
+        raise SweepError(f"{sweep.path} has no Boltzmann runs")
+    m = temperature_measures(sweep, late_fraction)
+    columns = ["T", "runs"] + [heading for _, heading, _ in MEASURES]
+    rows, values = [], []
+    for g in groups:
+        row, vals = [f"{g.value:g}", str(g.n)], {"T": float(g.value), "runs": g.n}
+        for key, _, fmt in MEASURES:
+            mean, lo, hi, _ = (float(v) for v in mean_ci(m[key][g.indices]))
+            band = f" [{lo:{fmt}}, {hi:{fmt}}]" if math.isfinite(lo) else ""
+            row.append(f"{mean:{fmt}}{band}")
+            vals.update({key: mean, f"{key} low": lo, f"{key} high": hi, f"{key} F": math.nan, f"{key} p": math.nan})
+        rows.append(row)
+        values.append(vals)
+    seeds = sorted(set.intersection(*({sweep.runs[i].seed for i in g.indices} for g in groups)))
+    row, vals = ["across T, blocked by seed", f"{len(seeds)} seeds"], {"T": math.nan, "runs": len(seeds)}
+    for key, _, _ in MEASURES:
+        by_seed = [{sweep.runs[i].seed: m[key][i] for i in g.indices} for g in groups]
+        a = block_anova([[r[s] for s in seeds] for r in by_seed])
+        row.append(f"F({a['df1']}, {a['df2']}) = {a['F']:.3g}, p = {a['p']:.3g}" if math.isfinite(a["p"]) else "n/a")
+        vals.update({key: math.nan, f"{key} low": math.nan, f"{key} high": math.nan, f"{key} F": a["F"],
+                     f"{key} p": a["p"]})
+    rows.append(row)
+    values.append(vals)
+    note = (f"{sweep.name}, {sweep.steps_done:,} steps a run: mean over seeds [95 % CI]; the last row tests each "
+            "measure across temperatures after removing each seed's own level (runs of one seed share their "
+            "random numbers).")
+    return Table(columns, rows, values, note)
