@@ -302,31 +302,31 @@ def _figures() -> tuple[Figure, ...]:
                "curiosity in such windows minus its own trailing 1,000-step moving average (squared latent distance, "
                "unitless), mean over runs with 95 % confidence intervals. Paper: section 5 (videos only).",
                _one(lambda p, ax: an.plot_observational(p["multi_agent"], ax), size=(8, 3.8))),
-        Figure("boltzmann_temperatures", ("boltzmann_temperatures",),
-               "Boltzmann temperatures T = 0.5 to 2.5, two agents: curiosity reward (squared latent distance, "
-               "unitless; mean of both agents), moving average over 1,000 steps, mean over {seeds} seeds with 95 % "
-               "confidence bands. x: agent steps. Paper: fig. 19.",
-               _one(lambda p, ax: an.plot_temperatures(p["boltzmann_temperatures"], ax), size=(9.5, 3.8))),
-        Figure("boltzmann_temperatures_actions", ("boltzmann_temperatures",),
-               "How often each agent chose each action over the whole run under the Boltzmann policy, one panel "
-               "per temperature T (0.5 at the top to 2.5 at the bottom), two agents. x: the seven actions; y: number "
-               "of agent steps the action was chosen, mean over {seeds} seeds, error bars 95 % confidence intervals "
-               "across seeds. A uniform choice would give each action 1/7 of the steps. Paper: fig. 19 shows only "
-               "curiosity.",
-               _policy_panels("boltzmann_temperatures", an.plot_action_histogram, height=2.4)),
-        Figure("boltzmann_low_temperatures", ("boltzmann_low_temperatures",),
-               "Boltzmann at low temperatures, T = 0.005 to 0.05, where its softmax starts to favour the actions "
-               "its self-models predict most surprising, two agents: curiosity reward (squared latent distance, "
-               "unitless; mean of both agents), moving average over 1,000 steps, mean over {seeds} seeds with 95 % "
-               "confidence bands. x: agent steps. Not in the paper (its fig. 19 has T = 0.5 to 2.5).",
-               _one(lambda p, ax: an.plot_temperatures(p["boltzmann_low_temperatures"], ax), size=(9.5, 3.8))),
-        Figure("boltzmann_low_temperatures_actions", ("boltzmann_low_temperatures",),
-               "How often each agent chose each action over the whole run under the Boltzmann policy at low "
-               "temperatures, one panel per temperature T (0.005 at the top to 0.05 at the bottom), two agents. x: "
-               "the seven actions; y: number of agent steps the action was chosen, mean over {seeds} seeds, error "
-               "bars 95 % confidence intervals across seeds. A uniform choice would give each action 1/7 of the "
-               "steps. Not in the paper.",
-               _policy_panels("boltzmann_low_temperatures", an.plot_action_histogram, height=2.4)),
+        *_temperature_figures("boltzmann_temperatures", "Boltzmann temperatures T = 0.5 to 2.5", "0.5", "2.5",
+                              curves="Paper: fig. 19.", actions="Paper: fig. 19 shows only curiosity."),
+        *_temperature_figures("boltzmann_low_temperatures",
+                              "Boltzmann at low temperatures, T = 0.005 to 0.05, where its softmax starts to favour "
+                              "the actions its self-models predict most surprising", "0.005", "0.05",
+                              curves="Not in the paper (its fig. 19 has T = 0.5 to 2.5).", actions="Not in the paper."),
+    )
+
+
+def _temperature_figures(preset: str, what: str, low: str, high: str, curves: str, actions: str):
+    """A Boltzmann temperature sweep's two figures: curiosity per T, and the actions per T."""
+    from mjx_curio import analysis as an
+
+    return (
+        Figure(preset, (preset,),
+               f"{what}, two agents: curiosity reward (squared latent distance, unitless; mean of both agents), "
+               "moving average over 1,000 steps, mean over {seeds} seeds with 95 % confidence bands. x: agent steps. "
+               + curves,
+               _one(lambda p, ax: an.plot_temperatures(p[preset], ax), size=(9.5, 3.8))),
+        Figure(f"{preset}_actions", (preset,),
+               f"How often each agent chose each action over the whole run under the Boltzmann policy, one panel "
+               f"per temperature T ({low} at the top to {high} at the bottom), two agents. x: the seven actions; y: "
+               "number of agent steps the action was chosen, mean over {seeds} seeds, error bars 95 % confidence "
+               "intervals across seeds. A uniform choice would give each action 1/7 of the steps. " + actions,
+               _policy_panels(preset, an.plot_action_histogram, height=2.4)),
     )
 
 
