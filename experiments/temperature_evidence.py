@@ -1,6 +1,7 @@
-"""Why the Boltzmann temperatures make no difference: how far apart the self-models' predictions lie.
+"""How far apart the self-models' predictions lie, and so how much a Boltzmann temperature can matter.
 
     python experiments/temperature_evidence.py runs/paper/boltzmann_temperatures
+    python experiments/temperature_evidence.py runs/paper/boltzmann_low_temperatures
 
 At the sweep's newest checkpoint (the one that keeps the replay buffers), every Boltzmann run's
 self-models predict the curiosity of all seven actions on every state of its replay buffer
