@@ -2,6 +2,7 @@
 computations, each claim's verdict on synthetic sweeps with a planted effect (and without it),
 and the whole table on the session's tiny sweeps."""
 
+import dataclasses
 import math
 import pathlib
 
@@ -214,6 +215,14 @@ def test_temperatures_anova_on_planted_late_curiosity():
     r = cl.claim_temperatures_alike({"boltzmann_temperatures": s})
     assert r.values["p"] > 0.5 and r.values["p_blocked"] < 0.05, r.values
     assert r.verdict.startswith("does not hold") and "blocked by seed (3 seeds" in r.statistic, r.verdict
+    # Temperatures that ran different seeds form no block: the one-way test decides.
+    s.metrics["curiosity"][:, 1500:, :] = late[:, None, None]
+    hot = max(s.groups("boltzmann"), key=lambda g: g.value)
+    for i in hot.indices:
+        s.runs[i] = dataclasses.replace(s.runs[i], seed=s.runs[i].seed + 10)
+    r = cl.claim_temperatures_alike({"boltzmann_temperatures": s})
+    assert "blocked" not in r.statistic and r.values["p"] == pytest.approx(1e-3), r.statistic
+    assert r.verdict == "does not hold: the temperatures differ (p=0.001)", r.verdict
     short = fake_sweep("boltzmann_temperatures", 2, [("boltzmann", t) for t in (0.5, 1.5)], 100, seeds=2)
     r = cl.claim_temperatures_alike({"boltzmann_temperatures": short})
     assert r.verdict.startswith("not testable at this scale (needs runs of >= 40,000 steps"), r.verdict
