@@ -195,6 +195,14 @@ def block_anova(table) -> dict:
     out.update(F=float(f), p=f_pvalue(f, out["df1"], out["df2"]))
     return out
 
+
+def seed_table(sweep: Sweep, groups: Sequence[Group], x) -> np.ndarray:
+    """[groups, seeds]: `x` (one value a run) arranged by group and seed, over the seeds that every
+    group ran (in seed order): the table `block_anova` takes, a seed being a block."""
+    seeds = sorted(set.intersection(*({sweep.runs[i].seed for i in g.indices} for g in groups))) if groups else []
+    by_seed = [{sweep.runs[i].seed: x[i] for i in g.indices} for g in groups]
+    return np.array([[row[seed] for seed in seeds] for row in by_seed], float).reshape(len(groups), len(seeds))
+
 def pearson_r(x, y) -> float:
     """Pearson correlation over the positions where both are finite; NaN below 3 or with no spread."""
     x, y = np.asarray(x, float), np.asarray(y, float)
@@ -648,9 +656,7 @@ def claim_temperatures_alike(presets: Mapping[str, Sweep]) -> ClaimResult:
     gs = sorted(s.groups("boltzmann"), key=lambda g: g.value)
     late = late_curiosity(s)
     a = one_way_anova([late[g.indices] for g in gs])
-    seeds = sorted(set.intersection(*(set(s.runs[i].seed for i in g.indices) for g in gs))) if gs else []
-    by_seed = [{s.runs[i].seed: late[i] for i in g.indices} for g in gs]
-    blocked = block_anova([[row[seed] for seed in seeds] for row in by_seed])
+    blocked = block_anova(seed_table(s, gs, late))
     cells = [f"T={g.value:g} {_ci(mean_ci(late[g.indices]))}" for g in gs]
     values = {"F": _num(a["F"]), "p": _num(a["p"]), "eta2": _num(a["eta2"]), "df1": a["df1"], "df2": a["df2"],
               "F_blocked": _num(blocked["F"]), "p_blocked": _num(blocked["p"]), "df2_blocked": blocked["df2"],

@@ -12,7 +12,7 @@ import math
 
 import numpy as np
 
-from mjx_curio.analysis.claims import block_anova, late_curiosity
+from mjx_curio.analysis.claims import block_anova, late_curiosity, seed_table
 from mjx_curio.analysis.stats import mean_ci, object_contacts
 from mjx_curio.analysis.sweeps import Sweep, SweepError
 from mjx_curio.analysis.tables import Table
@@ -67,11 +67,10 @@ def temperature_table(sweep: Sweep, late_fraction: float = 0.25) -> Table:
             vals.update({key: mean, f"{key} low": lo, f"{key} high": hi, f"{key} F": math.nan, f"{key} p": math.nan})
         rows.append(row)
         values.append(vals)
-    seeds = sorted(set.intersection(*({sweep.runs[i].seed for i in g.indices} for g in groups)))
-    row, vals = ["across T, blocked by seed", f"{len(seeds)} seeds"], {"T": math.nan, "runs": len(seeds)}
+    n_seeds = seed_table(sweep, groups, m["late_curiosity"]).shape[1]
+    row, vals = ["across T, blocked by seed", f"{n_seeds} seeds"], {"T": math.nan, "runs": n_seeds}
     for key, _, _ in MEASURES:
-        by_seed = [{sweep.runs[i].seed: m[key][i] for i in g.indices} for g in groups]
-        a = block_anova([[r[s] for s in seeds] for r in by_seed])
+        a = block_anova(seed_table(sweep, groups, m[key]))
         row.append(f"F({a['df1']}, {a['df2']}) = {a['F']:.3g}, p = {a['p']:.3g}" if math.isfinite(a["p"]) else "n/a")
         vals.update({key: math.nan, f"{key} low": math.nan, f"{key} high": math.nan, f"{key} F": a["F"],
                      f"{key} p": a["p"]})
