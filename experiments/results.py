@@ -13,12 +13,13 @@ alone. It never replaces a snapshot with a different sweep or with one that has 
 `page` loads those snapshots, draws the figures with the notebook's own functions
 (`mjx_curio.analysis.plot_*`) into docs/figures/results/, and rewrites the generated blocks of
 docs/results.md (between `<!-- generated: NAME -->` and `<!-- end: NAME -->`): the scale of the
-sweeps, the figures with their captions, the claims table (`analysis.claims_table`) and the
-Boltzmann temperatures measure by measure (`analysis.temperature_table`); the rest
+sweeps, the figures with their captions, the claims table (`analysis.claims_table`), the
+seeds each claim's tests need (`analysis.power_table`) and the Boltzmann temperatures measure by
+measure (`analysis.temperature_table`); the rest
 of the page (what the verdicts mean, why a claim may fail here) is prose and stays as written.
 The claims' numbers also go to docs/results/claims.csv.
 
-`check` recomputes the scale, claims and temperatures blocks from the snapshots and exits 1 if
+`check` recomputes the scale, claims, power and temperatures blocks from the snapshots and exits 1 if
 they differ from the page (the test suite does the same).
 """
 
@@ -151,6 +152,12 @@ def claims_block(presets: dict) -> str:
     from mjx_curio import analysis as an
 
     return an.claims_table(presets).to_markdown()
+
+
+def power_block(presets: dict) -> str:
+    from mjx_curio import analysis as an
+
+    return an.power_table(presets).to_markdown()
 
 
 @dataclasses.dataclass(frozen=True)
@@ -386,7 +393,8 @@ def fill(page: str, new: dict[str, str]) -> str:
 
 def computed_blocks(presets: dict) -> dict[str, str]:
     """The blocks that are pure functions of the snapshots' metrics (what `check` compares)."""
-    return {"scale": scale_block(presets), "claims": claims_block(presets), "temperatures": temperatures_block(presets)}
+    return {"scale": scale_block(presets), "claims": claims_block(presets), "power": power_block(presets),
+            "temperatures": temperatures_block(presets)}
 
 
 def write_page(src: pathlib.Path = SNAPSHOTS) -> None:

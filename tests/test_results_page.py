@@ -39,7 +39,7 @@ def test_the_page_is_what_the_committed_metrics_give(results):
     presets = results.load_presets()
     page = results.PAGE.read_text()
     blocks = results.blocks(page)
-    assert set(blocks) == {"scale", "figures", "claims", "temperatures"}
+    assert set(blocks) == {"scale", "figures", "claims", "power", "temperatures"}
     assert blocks["figures"] == results.figures_block(presets, out=None)
     if presets:  # the CSV's full-precision numbers may differ in the last bit on another CPU's NumPy
         _assert_same_csv(results.CLAIMS_CSV.read_text(), an.claims_table(presets).to_csv())
@@ -154,6 +154,9 @@ def test_page_blocks_on_the_tiny_sweeps(results, tiny_sweeps_dir, tmp_path):
     assert len(list((tmp_path / "all").glob("*.png"))) == len(results._figures()) == 15
     temperatures = results.temperatures_block(presets)
     assert temperatures.count("| across T, blocked by seed |") == 2 and "`boltzmann_low_temperatures`:" in temperatures
+    # Power from the tests with two seeds' values: the two-agent sweep's groups.
+    rows = [r.split(" | ") for r in results.power_block(presets).splitlines()[2:] if r.startswith("| ")]
+    assert rows and all(r[5] == "2" for r in rows), rows
 
 
 def test_bad_command_lines_are_messages_not_tracebacks(results, tmp_path, capsys):

@@ -31,6 +31,7 @@ Figure) it is given and returning it:
     headline_table                 mean +- sd across seeds per group of the key numbers
     temperature_table              per Boltzmann temperature: curiosity, action entropy, contacts;
                                    each tested across T, blocked by seed
+    power_table                    per test of each claim: the seeds it needs, the effect it detects
 
 and the numbers behind them (`moving_average`, `mean_ci`, `cumulative_interactions`,
 `interaction_frequency`, `action_totals`, `observation_classes`, `reconstructions`,
@@ -39,7 +40,7 @@ plotting needs matplotlib.
 
 The package, by job; each module imports only those above it (sweeps none; stats, recon and
 action_values sweeps; tables sweeps and stats; claims sweeps, stats and tables; temperatures
-claims, stats and tables; figures sweeps, stats, recon and action_values):
+claims, stats and tables; power claims and tables; figures sweeps, stats, recon and action_values):
 
     sweeps    loading: `load`, `find_sweeps`, `load_sweeps`, `pick_single_multi`; `Sweep`, `Run`,
               `Group`, `SweepError`; the configs a sweep ran with (`learner_config`, `run_config`,
@@ -59,6 +60,8 @@ claims, stats and tables; figures sweeps, stats, recon and action_values):
               NumPy tests they use (`welch_t`, `one_way_anova`, `block_anova`, `t_pvalue`, `f_pvalue`, `betainc`)
     temperatures  what a Boltzmann sweep's temperatures change, run by run: `temperature_table`
               and the `temperature_measures` behind it
+    power     how many seeds each claim's tests need and the smallest effect they detect:
+              `power_table`, and `seeds_needed`, `detectable`, `t_power`, `noncentral_t_sf` behind it
     figures   every `plot_*` function, the colours and labels they share, and saving
               (`figures_dir`, `save_figure`, `save_text`, `empty_axes`, `slug`)
 
@@ -72,6 +75,7 @@ from mjx_curio.analysis.action_values import ActionValues, action_values
 from mjx_curio.analysis.claims import (
     CLAIMS,
     ClaimResult,
+    Tested,
     VERDICTS,
     action_shares,
     agent_curiosity_coupling,
@@ -167,6 +171,7 @@ from mjx_curio.analysis.sweeps import (
     run_specs,
 )
 from mjx_curio.analysis.tables import Table, headline_table
+from mjx_curio.analysis.power import detectable, noncentral_t_sf, power_table, seeds_needed, t_power
 from mjx_curio.analysis.temperatures import temperature_measures, temperature_table
 
 __all__ = [
@@ -183,8 +188,10 @@ __all__ = [
     "Table", "headline_table",
     # temperatures
     "temperature_measures", "temperature_table",
+    # power
+    "detectable", "noncentral_t_sf", "power_table", "seeds_needed", "t_power",
     # claims
-    "CLAIMS", "ClaimResult", "VERDICTS", "action_shares", "agent_curiosity_coupling", "assign_presets",
+    "CLAIMS", "ClaimResult", "Tested", "VERDICTS", "action_shares", "agent_curiosity_coupling", "assign_presets",
     "balanced_rotation_share", "betainc", "block_anova", "claim_agents_move_together", "claim_boltzmann_trembles",
     "claim_contact_ranking", "claim_curiosity_dip_and_rise", "claim_observational_curiosity",
     "claim_prefers_moving_objects", "claim_self_model_predicts", "claim_stop_least", "claim_temperatures_alike",

@@ -17,7 +17,8 @@ Verdicts, and the rules every claim shares:
   does not hold    the sweeps are at the scale the claim needs, and the statistic does not show
                    the effect (no significant effect, or a significant one the other way; the
                    reason follows the colon). Not significant is not the same as refuted: with
-                   8 seeds a small effect can go undetected.
+                   8 seeds a small effect can go undetected (`power` says how small, from the
+                   values each claim's tests compared, `ClaimResult.tests`).
   not testable ... a preset sweep the claim needs is not loaded ("not testable: ..."), the metrics
                    cannot show it, or the sweeps are smaller than the claim needs: "not testable at
                    this scale (needs ...)", naming the run length and seeds that would test it.
@@ -266,10 +267,27 @@ def _fits(s: Sweep, want: dict) -> bool:
 # ------------------------------------------------------------------------------------ the claims
 
 
+@dataclasses.dataclass(frozen=True)
+class Tested:
+    """The values, one a run, behind one of a claim's tests, oriented so that the paper's effect
+    is positive; what `power` needs to say how many seeds the test wants.
+
+    One sample (`y` None): the effect is mean(x) - `null`, tested by its 95% t interval. Two
+    samples: mean(x) - mean(y), Welch's t. `blocked`: `x` is a [treatments, seeds] table of a claim
+    of *no* difference, tested by `block_anova`. `runs_per_seed`: the runs one seed adds to `x`
+    (the claims that pool every policy of a sweep add one run per policy)."""
+
+    x: np.ndarray
+    y: np.ndarray | None = None
+    null: float = 0.0
+    runs_per_seed: int = 1
+    blocked: bool = False
+
+
 @dataclasses.dataclass
 class ClaimResult:
     """One row of the claims table. `values`: the numbers behind `statistic` (None where the data
-    cannot give them)."""
+    cannot give them). `tests`: {label: `Tested`} for each test the verdict rests on."""
 
     key: str
     claim: str
@@ -277,6 +295,7 @@ class ClaimResult:
     statistic: str
     verdict: str
     values: dict = dataclasses.field(default_factory=dict)
+    tests: dict = dataclasses.field(default_factory=dict)
 
 
 VERDICTS = ("holds", "does not hold", "not testable")
@@ -302,10 +321,11 @@ def claim_curiosity_dip_and_rise(presets: Mapping[str, Sweep]) -> ClaimResult:
     groups = _source_groups(presets, sources)
     if not groups:
         return ClaimResult(key, claim, evidence, "n/a", _missing(("single_agent", "multi_agent"), presets))
-    parts, values, fails = [], {}, []
+    parts, values, fails, tests = [], {}, [], {}
     for label, s, g in groups:
         d = curiosity_fall_rise(s, g)
         fall, rise = mean_ci(d["fall"]), mean_ci(d["rise"])
+        tests.update({f"{label} fall": Tested(d["fall"]), f"{label} rise": Tested(d["rise"])})
         parts.append(f"{label}: fall {_ci(fall)}, rise {_ci(rise)}")
         values.update({f"{label} fall": _num(fall[0]), f"{label} fall low": _num(fall[1]),
                        f"{label} rise": _num(rise[0]), f"{label} rise low": _num(rise[1])})
@@ -315,7 +335,8 @@ def claim_curiosity_dip_and_rise(presets: Mapping[str, Sweep]) -> ClaimResult:
     gaps = [gap] if gap else []
     stat = ("mean over runs [95% CI] of fall = curiosity(steps 0-2k) - curiosity(10k-30k) and "
             "rise = curiosity(last 10k steps) - curiosity(10k-30k); " + "; ".join(parts))
-    return ClaimResult(key, claim, evidence, stat, _decide(gaps, fails, "every fall and rise CI above 0"), values)
+    return ClaimResult(key, claim, evidence, stat, _decide(gaps, fails, "every fall and rise CI above 0"), values,
+                       tests)
 
 
 def curiosity_fall_rise(sweep: Sweep, group: Group) -> dict:
@@ -380,7 +401,8 @@ def claim_contact_ranking(presets: Mapping[str, Sweep]) -> ClaimResult:
     stat = f"{s.name}: " + "; ".join(parts) + ". Welch t: " + "; ".join(tparts)
     return ClaimResult(key, claim, evidence, stat,
                        _decide([gap] if gap else [], [f"not significant: {', '.join(fails)}"] if fails else [],
-                               "all five Welch tests p < 0.05 in the paper's direction"), values)
+                               "all five Welch tests p < 0.05 in the paper's direction"), values,
+                       {label: Tested(hi, lo) for label, (hi, lo) in tests.items()})
 
 
 def claim_two_agents_higher(presets: Mapping[str, Sweep]) -> ClaimResult:
@@ -412,9 +434,10 @@ def claim_two_agents_higher(presets: Mapping[str, Sweep]) -> ClaimResult:
            for w, s, g in (("single", single, gs), ("multi", multi, gm))}
     vae = {w: _block_mean(s, per_agent_vae_loss(s)[g.indices].astype(float), lo, hi)
            for w, s, g in (("single", single, gs), ("multi", multi, gm))}
-    values, parts, fails = {}, [], []
+    values, parts, fails, tests = {}, [], [], {}
     for what, d in (("curiosity", cur), ("VAE loss per image", vae)):
         ms, mm = mean_ci(d["single"]), mean_ci(d["multi"])
+        tests[f"{what}: two agents > one"] = Tested(d["multi"], d["single"])
         w = welch_t(d["multi"], d["single"])
         values.update({f"{what} single": _num(ms[0]), f"{what} multi": _num(mm[0]), f"{what} t": _num(w["t"]),
                        f"{what} p": _num(w["p"])})
@@ -430,7 +453,7 @@ def claim_two_agents_higher(presets: Mapping[str, Sweep]) -> ClaimResult:
     stat = (f"mean over steps {lo:,}-{hi:,} of each run (the second half of the steps both sweeps ran), "
             f"{single.name} vs {multi.name}: " + "; ".join(parts))
     return ClaimResult(key, claim, evidence, stat, _decide(gaps, fails, "both Welch tests p < 0.05, multi > single"),
-                       values)
+                       values, tests)
 
 
 def claim_agents_move_together(presets: Mapping[str, Sweep]) -> ClaimResult:
@@ -460,7 +483,9 @@ def claim_agents_move_together(presets: Mapping[str, Sweep]) -> ClaimResult:
             f"(r={_f(np.tanh(cross[0]))}); within - baseline {_ci(diff)}")
     gap = _scale_gap(s, 10_000, {"runs with a baseline": n})
     fails = [] if diff[1] > 0 else ["the within-run correlation is not above the cross-run baseline"]
-    return ClaimResult(key, claim, evidence, stat, _decide([gap] if gap else [], fails, "the CI above 0"), values)
+    tests = {"within-run z - cross-run z": Tested(d["diff"], runs_per_seed=len(s.groups()))}
+    return ClaimResult(key, claim, evidence, stat, _decide([gap] if gap else [], fails, "the CI above 0"), values,
+                       tests)
 
 
 def agent_curiosity_coupling(sweep: Sweep, window: int = SMOOTH) -> dict:
@@ -511,7 +536,9 @@ def claim_prefers_moving_objects(presets: Mapping[str, Sweep]) -> ClaimResult:
             f"steps); share of object pixels in view {_ci(v)}; null 0.5")
     gap = _scale_gap(s, 40_000, {"runs with contacts": n})
     fails = [] if c[1] > 0.5 else ["the contact share's CI does not lie above 0.5"]
-    return ClaimResult(key, claim, evidence, stat, _decide([gap] if gap else [], fails, "the CI above 0.5"), values)
+    tests = {"sphere+cylinder share of contacts > 0.5": Tested(d["contact_share"], null=0.5)}
+    return ClaimResult(key, claim, evidence, stat, _decide([gap] if gap else [], fails, "the CI above 0.5"), values,
+                       tests)
 
 
 def moving_object_shares(sweep: Sweep, group: Group, min_contacts: int = 20) -> dict:
@@ -545,7 +572,7 @@ def claim_stop_least(presets: Mapping[str, Sweep]) -> ClaimResult:
     groups = _source_groups(presets, sources)
     if not groups:
         return ClaimResult(key, claim, evidence, "n/a", _missing(("single_agent", "multi_agent"), presets))
-    parts, values, fails = [], {}, []
+    parts, values, fails, tests = [], {}, [], {}
     for label, s, g in groups:
         if "stop" not in s.actions:
             return ClaimResult(key, claim, evidence, "n/a", f"not testable: {s.name} has no 'stop' action")
@@ -553,6 +580,7 @@ def claim_stop_least(presets: Mapping[str, Sweep]) -> ClaimResult:
         stop = s.actions.index("stop")
         margin = np.delete(shares, stop, axis=1).min(axis=1) - shares[:, stop]
         m, st = mean_ci(margin), mean_ci(shares[:, stop])
+        tests[f"{label} margin"] = Tested(margin)
         values.update({f"{label} margin": _num(m[0]), f"{label} margin low": _num(m[1]),
                        f"{label} stop share": _num(st[0])})
         parts.append(f"{label}: stop share {_ci(st)}, margin {_ci(m)}")
@@ -562,7 +590,7 @@ def claim_stop_least(presets: Mapping[str, Sweep]) -> ClaimResult:
     gaps = [gap] if gap else []
     stat = ("margin = share of the least chosen other action - share of stop, mean over runs [95% CI]; "
             + "; ".join(parts))
-    return ClaimResult(key, claim, evidence, stat, _decide(gaps, fails, "every margin CI above 0"), values)
+    return ClaimResult(key, claim, evidence, stat, _decide(gaps, fails, "every margin CI above 0"), values, tests)
 
 
 def action_shares(sweep: Sweep, group: Group) -> np.ndarray:
@@ -602,10 +630,11 @@ def claim_boltzmann_trembles(presets: Mapping[str, Sweep]) -> ClaimResult:
             m = mean_ci(bal[g.indices])
             values[f"{p} balanced rotation"] = _num(m[0])
             parts.append(f"{_short(p)} {_ci(m)}")
-    tparts = []
+    tparts, tests = [], {}
     for p in ("eps", "ucb"):
         if gs[p] is None:
             continue
+        tests[f"balanced rotation Boltzmann > {_short(p)}"] = Tested(bal[gs["boltzmann"].indices], bal[gs[p].indices])
         w = welch_t(bal[gs["boltzmann"].indices], bal[gs[p].indices])
         values[f"Boltzmann > {p} p"] = _num(w["p"])
         tparts.append(f"Boltzmann > {_short(p)}: t={_f(w['t'])}, p={_p(w['p'])}")
@@ -622,7 +651,7 @@ def claim_boltzmann_trembles(presets: Mapping[str, Sweep]) -> ClaimResult:
     else:
         verdict = ("not testable: per-step action order is not recorded; the window counts are consistent with "
                    "trembling (Boltzmann's balanced-rotation share is significantly higher)")
-    return ClaimResult(key, claim, evidence, stat, verdict, values)
+    return ClaimResult(key, claim, evidence, stat, verdict, values, tests)
 
 
 def balanced_rotation_share(sweep: Sweep) -> np.ndarray:
@@ -656,7 +685,8 @@ def claim_temperatures_alike(presets: Mapping[str, Sweep]) -> ClaimResult:
     gs = sorted(s.groups("boltzmann"), key=lambda g: g.value)
     late = late_curiosity(s)
     a = one_way_anova([late[g.indices] for g in gs])
-    blocked = block_anova(seed_table(s, gs, late))
+    table = seed_table(s, gs, late)
+    blocked = block_anova(table)
     cells = [f"T={g.value:g} {_ci(mean_ci(late[g.indices]))}" for g in gs]
     values = {"F": _num(a["F"]), "p": _num(a["p"]), "eta2": _num(a["eta2"]), "df1": a["df1"], "df2": a["df2"],
               "F_blocked": _num(blocked["F"]), "p_blocked": _num(blocked["p"]), "df2_blocked": blocked["df2"],
@@ -680,7 +710,8 @@ def claim_temperatures_alike(presets: Mapping[str, Sweep]) -> ClaimResult:
     if not np.isfinite(p):
         return ClaimResult(key, claim, evidence, stat, "not testable: the ANOVA is undefined (no spread)", values)
     verdict = "holds" if p >= ALPHA else f"does not hold: the temperatures differ (p={_p(p)})"
-    return ClaimResult(key, claim, evidence, stat, verdict, values)
+    tests = {"late curiosity, two temperatures apart": Tested(table, blocked=True)} if use_blocked else {}
+    return ClaimResult(key, claim, evidence, stat, verdict, values, tests)
 
 
 def late_curiosity(sweep: Sweep, fraction: float = 0.25) -> np.ndarray:
@@ -748,7 +779,11 @@ def claim_self_model_predicts(presets: Mapping[str, Sweep]) -> ClaimResult:
     gap = _scale_gap(s, 20_000, {"runs": n})
     fails = [] if rise[1] > 0 else ["the correlation does not rise significantly"]
     fails += [] if edge[1] > 0 else ["the self-model does not beat the baseline significantly"]
-    return ClaimResult(key, claim, evidence, stat, _decide([gap] if gap else [], fails, "both CIs above 0"), values)
+    k = len(s.groups())
+    tests = {"rise of z, first to last third": Tested(d["rise"], runs_per_seed=k),
+             "edge of z over the baseline": Tested(d["edge"], runs_per_seed=k)}
+    return ClaimResult(key, claim, evidence, stat, _decide([gap] if gap else [], fails, "both CIs above 0"), values,
+                       tests)
 
 
 def self_model_tracking(sweep: Sweep, window: int = SMOOTH, history: int = SMOOTH, ridge: float = 1.0) -> dict:
@@ -835,7 +870,9 @@ def claim_observational_curiosity(presets: Mapping[str, Sweep]) -> ClaimResult:
             f"{_ci(q)} ({d['n_quiet']:,} windows); difference {_ci(diff)}")
     gap = _scale_gap(s, 10_000, {"runs with both kinds of window": n})
     fails = [] if diff[1] > 0 else ["watching does not raise curiosity significantly"]
-    return ClaimResult(key, claim, evidence, stat, _decide([gap] if gap else [], fails, "the CI above 0"), values)
+    tests = {"excess watching - quiet": Tested(d["diff"], runs_per_seed=len(s.groups()))}
+    return ClaimResult(key, claim, evidence, stat, _decide([gap] if gap else [], fails, "the CI above 0"), values,
+                       tests)
 
 
 def watching_excess(sweep: Sweep, window: int = SMOOTH, moved_m: float = 0.01) -> dict:
