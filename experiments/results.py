@@ -48,18 +48,24 @@ DPI = 80
 
 
 def snapshot(src: str | pathlib.Path, dst: pathlib.Path = SNAPSHOTS) -> list[pathlib.Path]:
-    """Copy manifest, progress and metrics of every preset sweep in `src` to `dst/<preset>/`.
-    Refuses (ValueError, before copying anything) a snapshot that would replace one of another
-    sweep (different command) or one with more steps done."""
+    """Copy manifest, progress and metrics of every preset sweep in `src` to `dst/<preset>/`; a
+    preset whose seeds ran as several sweeps (`analysis.merge_sweeps`) has its first part there
+    and each other part in `dst/<preset>.seeds-<first>-<last>/`. Refuses (ValueError, before
+    copying anything) a snapshot that would replace one of another sweep (different command) or
+    one with more steps done."""
     from mjx_curio import analysis as an
 
     presets = an.assign_presets(an.load_sweeps(src))
     if not presets:
         raise ValueError(f"no sweep in {src} stands for a preset of mjx_curio/presets.toml")
     plan = []
-    for name, s in presets.items():  # a sweep standing for several presets is copied as the first
-        if any(t is s for _, t in plan):
-            continue
+    for preset, merged in presets.items():
+        for i, s in enumerate(merged.parts or (merged,)):
+            if any(t is s for _, t in plan):  # a sweep standing for several presets is copied as the first
+                continue
+            seeds = sorted({r.seed for r in s.runs})
+            plan.append((preset if i == 0 else f"{preset}.seeds-{seeds[0]}-{seeds[-1]}", s))
+    for name, s in plan:
         target = dst / name
         if (target / "manifest.json").is_file():
             old = an.load(target)
@@ -68,7 +74,6 @@ def snapshot(src: str | pathlib.Path, dst: pathlib.Path = SNAPSHOTS) -> list[pat
                                  f"{s.path} ran {_command(s.manifest)!r}. Move it away first.")
             if old.steps_done > s.steps_done:
                 raise ValueError(f"{target} has {old.steps_done:,} steps done, {s.path} only {s.steps_done:,}")
-        plan.append((name, s))
     written = []
     for name, s in plan:
         target = dst / name
@@ -127,7 +132,8 @@ def scale_block(presets: dict) -> str:
         halted = s.progress.get("halted", {})
         note = f"; halted runs: {len(halted)}" if halted else ""
         rows.append(f"| `{name}` | {s.n_agents} | {cfg.get('walls')} | {groups} | {s.image} × {s.image} | "
-                    f"{s.steps_done:,} / {int(cfg['steps']):,}{note} | `experiments/results/{s.name}` |")
+                    f"{s.steps_done:,} / {int(cfg['steps']):,}{note} | "
+                    + ", ".join(f"`experiments/results/{part.name}`" for part in s.parts or (s,)) + " |")
     if len(rows) == 2:
         return "No preset sweep has been snapshotted yet.\n"
     missing = [p for p in _preset_names() if p not in presets]

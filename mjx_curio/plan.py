@@ -157,6 +157,13 @@ def saved_values(manifest: dict) -> dict:
     return out
 
 
+def result_values(manifest: dict) -> dict:
+    """The keys a sweep's results depend on, as the sweep of `manifest` ran them: every key but
+    those a resume may change (bookkeeping, not results). Two sweeps with equal `result_values`
+    but for `seeds` and `first_seed` ran one experiment with different seeds."""
+    return {k: _norm(v) for k, v in saved_values(manifest).items() if k not in RESUME_FREE}
+
+
 def config_of(values: dict) -> dict:
     return {k: list(x) if isinstance(x, tuple) else x for k, x in values.items()}
 

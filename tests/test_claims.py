@@ -117,12 +117,12 @@ def test_pearson_r_known_values():
 # ------------------------------------------------------------------------------ synthetic sweeps
 
 
-def fake_sweep(name, n_agents, groups, n_windows, seeds=3, walls="same", preset="none", every=20):
-    """A `Sweep` built in memory: `groups` = [(policy, setting value)], `seeds` runs each, every
-    metric of the schema zero (floats: zero too) until a test sets it."""
+def fake_sweep(name, n_agents, groups, n_windows, seeds=3, walls="same", preset="none", every=20, first_seed=0):
+    """A `Sweep` built in memory: `groups` = [(policy, setting value)], `seeds` runs each (seeds
+    `first_seed` on), every metric of the schema zero (floats: zero too) until a test sets it."""
     runs = []
     for policy, value in groups:
-        for seed in range(seeds):
+        for seed in range(first_seed, first_seed + seeds):
             setting = an.SETTINGS[policy][0]
             row = dict(index=len(runs), name=f"{policy}-{value:g}-s{seed}", policy=policy, seed=seed, eps=0.2,
                        temperature=1.5, ucb_c=1.0)
@@ -131,7 +131,8 @@ def fake_sweep(name, n_agents, groups, n_windows, seeds=3, walls="same", preset=
     manifest = {"format": an.FORMAT, "runs": runs, "n_agents": n_agents, "agent_names": list(AGENT_NAMES[:n_agents]),
                 "actions": list(ACTIONS), "objects": list(OBJECTS), "view_targets": list(VIEW_TARGETS),
                 "metrics": {"every": every, "windows": n_windows},
-                "config": {"walls": walls, "preset": preset}, "run_config": {"image": 16}}
+                "config": {"walls": walls, "preset": preset, "seeds": seeds, "first_seed": first_seed},
+                "run_config": {"image": 16}}
     metrics = {k: np.zeros((len(runs), n_windows) + m.shape(n_agents), m.dtype) for k, m in SCHEMA.items()}
     metrics["steps_taken"][:] = every
     metrics["action_counts"][..., 0] = every
@@ -160,6 +161,35 @@ def test_assign_presets_by_settings_name_and_manifest():
     low_named = fake_sweep("a", 2, [("boltzmann", t) for t in (0.005, 0.05)], 4, preset="boltzmann_low_temperatures")
     assert cl.assign_presets([low_named, paper]) == {"boltzmann_temperatures": paper,
                                                      "boltzmann_low_temperatures": low_named}
+
+
+def test_one_experiments_seeds_from_several_sweeps_merge_into_one():
+    a = fake_sweep("multi_agent", 2, POLICIES, 6, seeds=3, preset="multi_agent")
+    b = fake_sweep("more", 2, POLICIES, 5, seeds=5, preset="multi_agent", first_seed=3)
+    for s, offset in ((a, 0.0), (b, 100.0)):
+        s.metrics["curiosity"][:] = offset + np.arange(s.n_runs)[:, None, None]
+    b.progress["halted"] = {"4": 60}
+    merged = an.merge_sweeps([b, a])  # parts in order of their first seed, whatever the order given
+    assert merged.parts == (a, b) and merged.n_runs == 24 and merged.n_windows == 5
+    assert [g.n for g in merged.groups()] == [8, 8, 8]
+    assert [merged.runs[i].seed for i in merged.groups()[0].indices] == list(range(8))
+    np.testing.assert_array_equal(merged.metrics["curiosity"][:, 0, 0], np.r_[np.arange(9), 100 + np.arange(15)])
+    assert merged.progress["halted"] == {"13": 60} and merged.steps_done == 100
+    assert merged.manifest["config"]["seeds"] == 8 and merged.manifest["config"]["first_seed"] == 0
+    with pytest.raises(an.SweepError, match="each keeps its own checkpoints"):
+        merged.checkpoints()
+    # A preset recorded by several sweeps is served by them merged; one sweep alone is itself.
+    got = cl.assign_presets([a, b])
+    assert got["multi_agent"].n_runs == 24 and cl.assign_presets([a])["multi_agent"] is a
+    assert "(n=8)" in cl.claim_contact_ranking(got).statistic and "(n=3)" not in cl.claim_contact_ranking(got).statistic
+    # Not one experiment: a setting the results depend on differs, or a run is repeated.
+    c = fake_sweep("other", 2, POLICIES, 5, seeds=2, preset="multi_agent", first_seed=8)
+    c.manifest["run_config"]["image"] = 32
+    with pytest.raises(an.SweepError, match=r"differ in image \(32 against 16\)"):
+        an.merge_sweeps([a, c])
+    d = fake_sweep("again", 2, [("ucb", 1.0)], 5, seeds=1, preset="multi_agent", first_seed=2)
+    with pytest.raises(an.SweepError, match="both ran UCB \\(c=1\\) with seed 2"):
+        cl.assign_presets([a, d])
 
 
 def test_missing_presets_make_every_row_not_testable_with_the_name():

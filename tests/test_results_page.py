@@ -127,6 +127,30 @@ def test_snapshot_copies_final_windows_and_refuses_to_lose_any(results, tiny_swe
         results.snapshot(src, dst)
 
 
+def test_a_presets_seeds_run_in_two_sweeps_snapshot_as_two_parts_and_load_as_one(results, tiny_sweep, tmp_path):
+    src, dst = tmp_path / "runs", tmp_path / "snap"
+    first = _copy_sweep(tiny_sweep, src / "multi_agent")
+    more = _copy_sweep(tiny_sweep, src / "multi_agent_more")
+    for part, shift in ((first, 0), (more, 2)):  # the second part ran seeds 2 and 3 (`first_seed=2`)
+        m = json.loads((part / "manifest.json").read_text())
+        m["config"].update(preset="multi_agent", first_seed=shift)
+        m["command"] += f" first_seed={shift}"
+        for r in m["runs"]:
+            r["seed"] += shift
+        (part / "manifest.json").write_text(json.dumps(m))
+    written = results.snapshot(src, dst)
+    assert [p.name for p in written] == ["multi_agent", "multi_agent.seeds-2-3"]
+    merged = results.load_presets(dst)["multi_agent"]
+    one = an.load(tiny_sweep)
+    assert merged.n_runs == 2 * one.n_runs and [p.name for p in merged.parts] == ["multi_agent", "multi_agent.seeds-2-3"]
+    assert {g.n for g in merged.groups()} == {4}  # 2 seeds a group in each part
+    np.testing.assert_array_equal(merged.metrics["curiosity"], np.concatenate([one.metrics["curiosity"]] * 2))
+    assert "`experiments/results/multi_agent`, `experiments/results/multi_agent.seeds-2-3`" in results.scale_block(
+        results.load_presets(dst))
+    # Snapshotting again replaces each part with itself.
+    assert [p.name for p in results.snapshot(src, dst)] == ["multi_agent", "multi_agent.seeds-2-3"]
+
+
 def test_page_blocks_on_the_tiny_sweeps(results, tiny_sweeps_dir, tmp_path):
     dst = tmp_path / "snap"
     results.snapshot(tiny_sweeps_dir, dst)

@@ -42,9 +42,10 @@ The package, by job; each module imports only those above it (sweeps none; stats
 action_values sweeps; tables sweeps and stats; claims sweeps, stats and tables; temperatures
 claims, stats and tables; power claims and tables; figures sweeps, stats, recon and action_values):
 
-    sweeps    loading: `load`, `find_sweeps`, `load_sweeps`, `pick_single_multi`; `Sweep`, `Run`,
-              `Group`, `SweepError`; the configs a sweep ran with (`learner_config`, `run_config`,
-              `run_specs`) rebuilt from its manifest
+    sweeps    loading: `load`, `find_sweeps`, `load_sweeps`, `merge_sweeps` (one experiment's seeds
+              from several sweeps), `pick_single_multi`; `Sweep`, `Run`, `Group`, `SweepError`; the
+              configs a sweep ran with (`learner_config`, `run_config`, `run_specs`) rebuilt from
+              its manifest
     stats     statistics: `t_quantile_975`, `mean_ci`, `mean_sd`, `moving_average`, `bin_windows`
               and the numbers the figures draw (`per_agent_vae_loss`, `object_contacts`,
               `agent_contacts`, `cumulative_interactions`, `interaction_frequency`,
@@ -166,6 +167,7 @@ from mjx_curio.analysis.sweeps import (
     learner_config,
     load,
     load_sweeps,
+    merge_sweeps,
     pick_single_multi,
     run_config,
     run_specs,
@@ -177,7 +179,8 @@ from mjx_curio.analysis.temperatures import temperature_measures, temperature_ta
 __all__ = [
     # sweeps
     "FORMAT", "POLICY_LABELS", "SETTINGS", "SWEEP_OUTPUTS", "Group", "Run", "Sweep", "SweepError", "drop_diverged",
-    "find_sweeps", "learner_config", "load", "load_sweeps", "pick_single_multi", "run_config", "run_specs",
+    "find_sweeps", "learner_config", "load", "load_sweeps", "merge_sweeps", "pick_single_multi", "run_config",
+    "run_specs",
     # stats
     "OBS_CLASSES", "action_totals", "agent_contacts", "bin_windows", "cumulative_interactions",
     "interaction_frequency", "mean_ci", "mean_sd", "moving_average", "object_contacts", "observation_classes",

@@ -49,7 +49,7 @@ from typing import Callable, Mapping, Sequence
 import numpy as np
 
 from mjx_curio.analysis.stats import agent_contacts, mean_ci, moving_average, object_contacts, per_agent_vae_loss
-from mjx_curio.analysis.sweeps import Group, Sweep, load_sweeps
+from mjx_curio.analysis.sweeps import Group, Sweep, load_sweeps, merge_sweeps
 from mjx_curio.analysis.tables import Table
 
 ALPHA = 0.05
@@ -230,19 +230,22 @@ def assign_presets(sweeps) -> dict[str, Sweep]:
     fit the preset (same number of agents and walls, at least one of its policies, and for
     `boltzmann_temperatures` at least 2 temperatures, all >= 0.5; for `boltzmann_low_temperatures`
     all below 0.5). A sweep named after or made by one preset
-    serves only that one; the first fitting sweep wins."""
+    serves only that one; the first fitting sweep wins. Several sweeps made by one preset are its
+    seeds run in parts (`first_seed=3 seeds=5` after `seeds=3`) and serve it as one
+    (`merge_sweeps`; SweepError, naming what differs, where they are not one experiment)."""
     if isinstance(sweeps, (str, pathlib.Path)):
         sweeps = load_sweeps(sweeps)
     named = list(sweeps.items()) if isinstance(sweeps, Mapping) else [(s.name, s) for s in sweeps]
-    out: dict[str, Sweep] = {}
+    claimed: dict[str, list[Sweep]] = {}
     fixed = set()
     for name, s in named:
         recorded = s.manifest.get("config", {}).get("preset", "none")
         for key in (recorded, name):
             if key in PRESET_SETTINGS:
-                out.setdefault(key, s)
+                claimed.setdefault(key, []).append(s)
                 fixed.add(id(s))
                 break
+    out: dict[str, Sweep] = {key: merge_sweeps(parts) for key, parts in claimed.items()}
     for preset, want in PRESET_SETTINGS.items():
         if preset in out:
             continue

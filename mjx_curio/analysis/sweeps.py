@@ -12,9 +12,10 @@ setting (eps, temperature or c) but differ in seed form a `Group`; every figure 
 seeds into a mean and a 95% confidence band of that mean (Student t, across seeds).
 
 Here: `Sweep`, `Run`, `Group`, `SweepError`, `load`, `find_sweeps`, `load_sweeps`,
-`pick_single_multi`, and the configs a sweep ran with rebuilt from its manifest (`learner_config`,
-`run_config`, `run_specs`). Needs only NumPy (and orbax for checkpoints); imports no other module
-of this package.
+`merge_sweeps` (one experiment's seeds run as several sweeps, read as one), `pick_single_multi`,
+and the configs a sweep ran with rebuilt from its manifest (`learner_config`, `run_config`,
+`run_specs`). Needs only NumPy (and orbax for checkpoints); imports no other module of the
+analysis package (only `plan` and `config`, for what a sweep ran with).
 """
 
 from __future__ import annotations
@@ -100,6 +101,7 @@ class Sweep:
       steps: int array [windows]: the agent step at the end of each final window.
       metrics: name -> array [runs, windows, ...] (see `metrics.SCHEMA` / manifest
         `metrics.schema` for units and meanings), the final windows only.
+      parts: the sweeps it was merged from (`merge_sweeps`), else empty.
     """
 
     def __init__(self, path: pathlib.Path, manifest: dict, progress: dict, steps: np.ndarray, metrics: dict):
@@ -117,6 +119,7 @@ class Sweep:
         self.metrics_every = int(manifest["metrics"]["every"])
         self.steps = steps
         self.metrics = metrics
+        self.parts: tuple[Sweep, ...] = ()
         self._ckpts = None
         self._raw_cache: dict[int, dict] = {}
         self._replay_cache: dict[tuple, dict] = {}
@@ -268,6 +271,10 @@ class Sweep:
 
     def checkpoints(self):
         """The sweep's `checkpoint.Checkpoints`, read-only (SweepError if there are none)."""
+        if self.parts:
+            raise SweepError(f"{self.name} is {len(self.parts)} sweeps merged ("
+                             f"{', '.join(str(s.path) for s in self.parts)}); each keeps its own checkpoints: "
+                             "read them from `sweep.parts`")
         if self._ckpts is None:
             state_dir = self.checkpoints_dir / "state"
             if not state_dir.is_dir():
@@ -404,6 +411,60 @@ def drop_diverged(metrics: dict[str, np.ndarray], steps: np.ndarray) -> dict[str
             x[r, first:] = np.nan if np.issubdtype(x.dtype, np.floating) else 0
         found[str(r)] = int(steps[first])
     return found
+
+
+def merge_sweeps(parts: Sequence[Sweep]) -> Sweep:
+    """One `Sweep` of the runs of `parts`: sweeps of one experiment that ran different seeds, e.g.
+    a preset's first 3 seeds and, later, `first_seed=3 seeds=5` more in another directory. They
+    must agree in every key the results depend on but `seeds` and `first_seed`
+    (`plan.result_values`) and may not repeat a run (policy, setting, seed). The runs stand part
+    after part, the parts in order of their first seed; the windows are those every part has
+    finished; `halted` runs keep their mark. The merged sweep holds metrics only: each part keeps
+    its own checkpoints (`Sweep.parts`). SweepError, naming what differs, where they do not fit."""
+    from mjx_curio.plan import result_values
+
+    parts = sorted(parts, key=lambda s: (min((r.seed for r in s.runs), default=0), str(s.path)))
+    if not parts:
+        raise SweepError("merge_sweeps: no sweeps given")
+    if len(parts) == 1:
+        return parts[0]
+    first = parts[0]
+    want = {k: v for k, v in result_values(first.manifest).items() if k not in ("seeds", "first_seed")}
+    seen: dict[tuple, pathlib.Path] = {}
+    for s in parts:
+        got = {k: v for k, v in result_values(s.manifest).items() if k not in ("seeds", "first_seed")}
+        diff = sorted(k for k in want.keys() | got.keys() if want.get(k) != got.get(k))
+        if diff:
+            raise SweepError(f"{s.path} and {first.path} are not seeds of one experiment: they differ in "
+                             + "; ".join(f"{k} ({got.get(k)!r} against {want.get(k)!r})" for k in diff))
+        if s.manifest["metrics"].get("schema") != first.manifest["metrics"].get("schema") or \
+                s.metrics_every != first.metrics_every:
+            raise SweepError(f"{s.path} and {first.path} record different metrics")
+        for r in s.runs:
+            key = (r.policy, r.setting, r.seed)
+            if key in seen:
+                raise SweepError(f"{s.path} and {seen[key]} both ran {r.group_label} with seed {r.seed}")
+            seen[key] = s.path
+    windows = min(s.n_windows for s in parts)
+    steps = first.steps[:windows]
+    for s in parts:
+        if not np.array_equal(s.steps[:windows], steps):
+            raise SweepError(f"{s.path} and {first.path} end their metrics windows at different steps")
+    rows, halted, offset = [], {}, 0
+    for s in parts:
+        rows += [{**r, "index": offset + i} for i, r in enumerate(s.manifest["runs"])]
+        halted.update({str(offset + int(r)): step for r, step in s.progress.get("halted", {}).items()})
+        offset += s.n_runs
+    manifest = {**first.manifest, "runs": rows, "metrics": {**first.manifest["metrics"], "windows": windows},
+                "config": {**first.manifest["config"], "seeds": len({r.seed for s in parts for r in s.runs}),
+                           "first_seed": min(r.seed for s in parts for r in s.runs)},
+                "parts": [{"path": str(s.path), "command": s.manifest.get("command"), "git": s.manifest.get("git")}
+                          for s in parts]}
+    progress = {"windows_done": windows, "steps_done": int(steps[-1]) if windows else 0, "halted": halted}
+    metrics = {k: np.concatenate([s.metrics[k][:, :windows] for s in parts]) for k in first.metrics}
+    merged = Sweep(first.path, manifest, progress, steps, metrics)
+    merged.parts = tuple(parts)
+    return merged
 
 
 def find_sweeps(path: str | pathlib.Path) -> list[pathlib.Path]:
