@@ -189,12 +189,13 @@ def _policy_panels(preset: str, plot: Callable, height: float = 3.0, width: floa
     return draw
 
 
-def _one(plot: Callable, size=(8.0, 3.6)):
+def _one(plot: Callable, size=(8.0, 3.6), panels: int = 1):
+    """A figure of one row of `panels` axes (one Axes, or a list of them, passed to `plot`)."""
     def draw(presets):
         import matplotlib.pyplot as plt
 
-        fig, ax = plt.subplots(figsize=size)
-        plot(presets, ax)
+        fig, axes = plt.subplots(1, panels, figsize=size)
+        plot(presets, axes)
         fig.tight_layout()
         return fig
     return draw
@@ -321,7 +322,26 @@ def _figures() -> tuple[Figure, ...]:
                               "Boltzmann at low temperatures, T = 0.005 to 0.05, where its softmax starts to favour "
                               "the actions its self-models predict most surprising", "0.005", "0.05",
                               curves="Not in the paper (its fig. 19 has T = 0.5 to 2.5).", actions="Not in the paper."),
+        Figure("boltzmann_temperature_measures", ("boltzmann_temperatures", "boltzmann_low_temperatures"),
+               "What the Boltzmann temperature changes, from T = 0.005 to 2.5: the paper's temperatures and the low "
+               "ones read as one sweep over the steps both ran, two agents. One panel a measure, against T (log "
+               "scale): claim 7's late curiosity (mean over the last quarter of the steps, squared latent distance, "
+               "unitless), the entropy of the action choice over ln 7 (1: every action equally often), the most "
+               "chosen action's share of the steps, and object contacts per 1,000 agent-steps (both agents). Dots: "
+               "runs; line: mean over {seeds} seeds with 95 % confidence intervals; grey span: the paper's "
+               "temperatures; dashed: a uniform choice. Not in the paper.",
+               _one(lambda p, axes: an.plot_temperature_measures(_all_temperatures(p), axes), size=(16, 3.6),
+                    panels=4)),
     )
+
+
+def _all_temperatures(presets: dict):
+    """The paper's Boltzmann temperatures and the low ones as one sweep (a sweep standing for
+    both presets is itself)."""
+    from mjx_curio import analysis as an
+
+    paper, low = presets["boltzmann_temperatures"], presets["boltzmann_low_temperatures"]
+    return paper if paper is low else an.merge_sweeps([paper, low], differ=("temperature", "preset"))
 
 
 def _temperature_figures(preset: str, what: str, low: str, high: str, curves: str, actions: str):

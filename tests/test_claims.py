@@ -192,6 +192,26 @@ def test_one_experiments_seeds_from_several_sweeps_merge_into_one():
         cl.assign_presets([a, d])
 
 
+def test_pieces_of_one_grid_merge_over_the_keys_they_may_differ_in():
+    # The paper's temperatures and low ones, the same seeds: one sweep over every temperature.
+    paper = fake_sweep("boltzmann_temperatures", 2, [("boltzmann", t) for t in (0.5, 2.5)], 6,
+                       preset="boltzmann_temperatures")
+    low = fake_sweep("boltzmann_low_temperatures", 2, [("boltzmann", t) for t in (0.005, 0.05)], 4,
+                     preset="boltzmann_low_temperatures")
+    paper.manifest["config"]["temperature"], low.manifest["config"]["temperature"] = [0.5, 2.5], [0.005, 0.05]
+    with pytest.raises(an.SweepError, match="differ in preset .*; temperature"):
+        an.merge_sweeps([paper, low])
+    both = an.merge_sweeps([paper, low], differ=("temperature", "preset"))
+    assert both.name == "boltzmann_temperatures + boltzmann_low_temperatures" and both.n_windows == 4
+    assert [g.value for g in sorted(both.groups("boltzmann"), key=lambda g: g.value)] == [0.005, 0.05, 0.5, 2.5]
+    assert both.manifest["config"]["temperature"] == [0.005, 0.05, 0.5, 2.5]
+    assert both.manifest["config"]["preset"] == ["boltzmann_temperatures", "boltzmann_low_temperatures"]
+    # Seeds are shared across the pieces, so the blocked test sees all four temperatures per seed.
+    late = cl.late_curiosity(both)
+    gs = sorted(both.groups("boltzmann"), key=lambda g: g.value)
+    assert cl.seed_table(both, gs, late).shape == (4, 3)
+
+
 def test_missing_presets_make_every_row_not_testable_with_the_name():
     table = cl.claims_table({})
     assert [v["key"] for v in table.values] == ["1", "2", "3", "4", "5", "6a", "6b", "7", "8", "9"]

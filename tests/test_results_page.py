@@ -175,7 +175,7 @@ def test_page_blocks_on_the_tiny_sweeps(results, tiny_sweeps_dir, tmp_path):
     presets["boltzmann_low_temperatures"] = presets["multi_agent"]
     presets["single_agent_walls_different"] = presets["single_agent"]
     results.figures_block(presets, out=tmp_path / "all")
-    assert len(list((tmp_path / "all").glob("*.png"))) == len(results._figures()) == 15
+    assert len(list((tmp_path / "all").glob("*.png"))) == len(results._figures()) == 16
     temperatures = results.temperatures_block(presets)
     assert temperatures.count("| across T, blocked by seed |") == 2 and "`boltzmann_low_temperatures`:" in temperatures
     # Power from the tests with two seeds' values: the two-agent sweep's groups.

@@ -18,6 +18,7 @@ Figure) it is given and returning it:
     plot_curiosity                 figs 8, 15, 17, 18, 20: curiosity per agent, raw + moving average
     plot_curiosity_groups          fig 11: curiosity per policy
     plot_temperatures              fig 19: Boltzmann temperatures compared
+    plot_temperature_measures      what T changes (curiosity, action entropy, contacts), over decades of T
     plot_single_vs_multi           fig 23: curiosity, single- vs multi-agent sweep
     plot_vae_single_vs_multi       fig 24: VAE loss, single- vs multi-agent sweep
     plot_cumulative_interactions   figs 21 (objects), 22 (agent-agent), normalised to the maximum
@@ -40,7 +41,8 @@ plotting needs matplotlib.
 
 The package, by job; each module imports only those above it (sweeps none; stats, recon and
 action_values sweeps; tables sweeps and stats; claims sweeps, stats and tables; temperatures
-claims, stats and tables; power claims and tables; figures sweeps, stats, recon and action_values):
+claims, stats and tables; power claims and tables; figures sweeps, stats, recon, action_values and
+temperatures):
 
     sweeps    loading: `load`, `find_sweeps`, `load_sweeps`, `merge_sweeps` (one experiment's seeds
               from several sweeps), `pick_single_multi`; `Sweep`, `Run`, `Group`, `SweepError`; the
@@ -129,6 +131,7 @@ from mjx_curio.analysis.figures import (
     plot_observational,
     plot_reconstructions,
     plot_single_vs_multi,
+    plot_temperature_measures,
     plot_temperatures,
     plot_vae_single_vs_multi,
     plot_view_fractions,
@@ -205,6 +208,6 @@ __all__ = [
     "AGENT_COLORS", "CURIOSITY_LABEL", "FIGURES_DIRNAME", "POLICY_COLORS", "STEPS_LABEL", "TARGET_COLORS",
     "empty_axes", "figures_dir", "plot_action_histogram", "plot_boltzmann_greediness", "plot_cumulative_interactions",
     "plot_curiosity", "plot_curiosity_groups", "plot_interaction_frequency", "plot_losses", "plot_observational",
-    "plot_reconstructions", "plot_single_vs_multi", "plot_temperatures", "plot_vae_single_vs_multi",
-    "plot_view_fractions", "save_figure", "save_text", "slug",
+    "plot_reconstructions", "plot_single_vs_multi", "plot_temperature_measures", "plot_temperatures",
+    "plot_vae_single_vs_multi", "plot_view_fractions", "save_figure", "save_text", "slug",
 ]

@@ -2,7 +2,8 @@
 Axes (or Figure) it is given and returning it (the list is in the package docstring), the
 colours and labels they share, and saving figures and text under a sweep's `figures/`
 (`figures_dir`, `save_figure`, `save_text`, `empty_axes`, `slug`). matplotlib is imported only
-where a colour map is needed; imports `sweeps`, `stats` and `recon`.
+where a colour map is needed; imports `sweeps`, `stats`, `recon`, `action_values` and
+`temperatures`.
 """
 
 from __future__ import annotations
@@ -28,6 +29,7 @@ from mjx_curio.analysis.stats import (
     per_agent_vae_loss,
 )
 from mjx_curio.analysis.sweeps import SWEEP_OUTPUTS, Group, Sweep, SweepError
+from mjx_curio.analysis.temperatures import MEASURES, temperature_measures
 
 FIGURES_DIRNAME = "figures"  # where the notebook saves figures inside a sweep directory (never written by a sweep)
 
@@ -382,6 +384,36 @@ def plot_boltzmann_greediness(sweep: Sweep, ax, runs: Sequence[int] | None = Non
     return _finish(ax, f"Boltzmann policy on the states the runs visited: how greedy softmax(q / T) is\n(self-models at "
                        f"{' and '.join(f'{s:,}' for s in steps)} steps, each run's replay buffer; dots: the run's own T)",
                    "temperature T (log scale)", "P(most favoured action)\n(mean over states and agents)")
+
+
+def plot_temperature_measures(sweep: Sweep, axes, paper_range=(0.5, 2.5), late_fraction: float = 0.25):
+    """What the Boltzmann temperature changes, against T (log scale): one panel per measure of
+    `temperatures.MEASURES` (claim 7's late curiosity, the action entropy over ln(actions), the
+    most chosen action's share, object contacts per 1,000 agent-steps), each run a dot and each
+    T's mean over seeds with its 95% confidence interval; grey span: `paper_range`; dashed: what a
+    uniform choice gives. Made for temperatures spanning decades, e.g. the paper's Boltzmann sweep
+    and the low-temperature one read as one (`merge_sweeps(..., differ=("temperature", "preset"))`)."""
+    gs = sorted(sweep.groups("boltzmann"), key=lambda g: g.value)
+    if not gs:
+        raise SweepError(f"{sweep.path} has no Boltzmann runs")
+    axes = list(np.ravel(axes))
+    if len(axes) != len(MEASURES):
+        raise ValueError(f"plot_temperature_measures draws {len(MEASURES)} panels; got {len(axes)} axes")
+    m = temperature_measures(sweep, late_fraction)
+    t = np.array([g.value for g in gs])
+    uniform = {"action_entropy": 1.0, "top_share": 1.0 / len(sweep.actions)}
+    for ax, (key, heading, _) in zip(axes, MEASURES):
+        for g in gs:
+            ax.plot(np.full(g.n, g.value), m[key][g.indices], "o", ms=3, color="0.55", alpha=0.7)
+        mean, lo, hi, _ = (np.array(v, float) for v in zip(*(mean_ci(m[key][g.indices]) for g in gs)))
+        ax.errorbar(t, mean, yerr=[mean - lo, hi - mean], fmt="o-", color=POLICY_COLORS["boltzmann"], ms=5,
+                    capsize=3, lw=1.2, label=f"mean over seeds, 95% CI ({gs[0].n} seeds)")
+        if key in uniform:
+            ax.axhline(uniform[key], color="0.4", ls="--", lw=0.8, label="uniform choice")
+        ax.axvspan(*paper_range, color="0.85", alpha=0.5, lw=0, label="the paper's temperatures")
+        ax.set_xscale("log")
+        _finish(ax, heading, "temperature T (log scale)", heading, legend=ax is axes[0] or key in uniform)
+    return axes
 
 
 # ---------------------------------------------------------------------------------- saving

@@ -93,7 +93,8 @@ class Sweep:
     """A sweep directory read into NumPy arrays. Build with `load(path)`.
 
     Attributes:
-      path, name: the directory and its name.
+      path, name: the directory and its name (a merged sweep's: its first part's directory, and
+        its parts' names joined by " + ").
       manifest, progress: the parsed manifest.json and progress.json.
       runs: list of `Run`, in the order of the metrics' first axis.
       n_agents, agent_names, actions, objects, view_targets: from the manifest.
@@ -413,26 +414,32 @@ def drop_diverged(metrics: dict[str, np.ndarray], steps: np.ndarray) -> dict[str
     return found
 
 
-def merge_sweeps(parts: Sequence[Sweep]) -> Sweep:
+def merge_sweeps(parts: Sequence[Sweep], differ: Sequence[str] = ()) -> Sweep:
     """One `Sweep` of the runs of `parts`: sweeps of one experiment that ran different seeds, e.g.
     a preset's first 3 seeds and, later, `first_seed=3 seeds=5` more in another directory. They
     must agree in every key the results depend on but `seeds` and `first_seed`
     (`plan.result_values`) and may not repeat a run (policy, setting, seed). The runs stand part
-    after part, the parts in order of their first seed; the windows are those every part has
+    after part, the parts in order of their first seed (as given where it ties); the windows are those every part has
     finished; `halted` runs keep their mark. The merged sweep holds metrics only: each part keeps
-    its own checkpoints (`Sweep.parts`). SweepError, naming what differs, where they do not fit."""
+    its own checkpoints (`Sweep.parts`). SweepError, naming what differs, where they do not fit.
+
+    `differ`: more keys the parts may differ in, for parts that each ran a piece of one grid, e.g.
+    `("temperature", "preset")` for the paper's Boltzmann temperatures and the low ones, read as
+    one sweep over all of them; the merged manifest records each such key's values from every
+    part (a list's values pooled and sorted)."""
     from mjx_curio.plan import result_values
 
-    parts = sorted(parts, key=lambda s: (min((r.seed for r in s.runs), default=0), str(s.path)))
+    parts = sorted(parts, key=lambda s: min((r.seed for r in s.runs), default=0))  # ties: in the order given
     if not parts:
         raise SweepError("merge_sweeps: no sweeps given")
     if len(parts) == 1:
         return parts[0]
     first = parts[0]
-    want = {k: v for k, v in result_values(first.manifest).items() if k not in ("seeds", "first_seed")}
+    free = {"seeds", "first_seed", *differ}
+    want = {k: v for k, v in result_values(first.manifest).items() if k not in free}
     seen: dict[tuple, pathlib.Path] = {}
     for s in parts:
-        got = {k: v for k, v in result_values(s.manifest).items() if k not in ("seeds", "first_seed")}
+        got = {k: v for k, v in result_values(s.manifest).items() if k not in free}
         diff = sorted(k for k in want.keys() | got.keys() if want.get(k) != got.get(k))
         if diff:
             raise SweepError(f"{s.path} and {first.path} are not seeds of one experiment: they differ in "
@@ -455,14 +462,22 @@ def merge_sweeps(parts: Sequence[Sweep]) -> Sweep:
         rows += [{**r, "index": offset + i} for i, r in enumerate(s.manifest["runs"])]
         halted.update({str(offset + int(r)): step for r, step in s.progress.get("halted", {}).items()})
         offset += s.n_runs
+    config = {**first.manifest["config"], "seeds": len({r.seed for s in parts for r in s.runs}),
+              "first_seed": min(r.seed for s in parts for r in s.runs)}
+    for k in differ:
+        values = [s.manifest["config"].get(k) for s in parts]
+        if all(isinstance(v, list) for v in values):
+            config[k] = sorted({x for v in values for x in v})
+        else:
+            config[k] = list(dict.fromkeys(values))
     manifest = {**first.manifest, "runs": rows, "metrics": {**first.manifest["metrics"], "windows": windows},
-                "config": {**first.manifest["config"], "seeds": len({r.seed for s in parts for r in s.runs}),
-                           "first_seed": min(r.seed for s in parts for r in s.runs)},
+                "config": config,
                 "parts": [{"path": str(s.path), "command": s.manifest.get("command"), "git": s.manifest.get("git")}
                           for s in parts]}
     progress = {"windows_done": windows, "steps_done": int(steps[-1]) if windows else 0, "halted": halted}
     metrics = {k: np.concatenate([s.metrics[k][:, :windows] for s in parts]) for k in first.metrics}
     merged = Sweep(first.path, manifest, progress, steps, metrics)
+    merged.name = " + ".join(s.name for s in parts)
     merged.parts = tuple(parts)
     return merged
 
