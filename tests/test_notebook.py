@@ -60,7 +60,7 @@ def test_notebook_runs(tiny_sweeps_dir):
     slugs = {"multi": ["eps-eps0.2", "boltzmann-temperature0.5", "boltzmann-temperature1.5", "ucb-ucb_c1"],
              "single": ["eps-eps0.2", "ucb-ucb_c1"]}
     expected = {"fig23-single-vs-multi-curiosity", "fig24-single-vs-multi-vae", "multi-fig19-temperatures",
-                "multi-boltzmann-greediness", "multi-observational"}
+                "multi-boltzmann-greediness", "multi-observational", "multi-temperature-measures"}
     for s, groups in slugs.items():
         expected |= {f"{s}-fig11-curiosity-policies", f"{s}-fig21-22-cumulative-interactions", f"{s}-fig10-actions",
                      f"{s}-fig07-reconstructions-run0", f"{s}-losses"}
