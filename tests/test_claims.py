@@ -83,6 +83,8 @@ def test_block_anova_with_two_treatments_is_the_paired_t_test():
     b = cl.block_anova(y)
     assert b["F"] == pytest.approx(27.0) and (b["df1"], b["df2"], b["b"]) == (1, 3, 4)
     assert b["p"] == pytest.approx(cl.t_pvalue(math.sqrt(27.0), 3))
+    # The error variance of one treatment's value against the other's is that of the differences.
+    assert 2 * b["ms_error"] == pytest.approx(1 / 3)
     try:  # an independent implementation where one is installed (scipy is not a dependency)
         from scipy import stats as sps
     except ImportError:

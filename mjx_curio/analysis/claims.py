@@ -168,14 +168,15 @@ def block_anova(table) -> dict:
     design). Runs of one seed share their random numbers, so a seed is a block; removing its level
     takes the variance the runs of one seed share out of the error term. Blocks with a NaN are
     left out. {"F", "df1", "df2", "p", "eta2" (treatment share of the sum of squares left after
-    the blocks'), "block_share" (the blocks' share of the total), "k", "b"}. NaN where fewer than
+    the blocks'), "block_share" (the blocks' share of the total), "ms_error" (the residual mean
+    square, the error variance of a comparison of treatments), "k", "b"}. NaN where fewer than
     2 treatments or 2 blocks or no spread; F = inf, p = 0 where the residual is exactly 0 but the
     treatments differ."""
     y = np.asarray(table, float)
     y = y[:, np.isfinite(y).all(axis=0)]
     k, b = y.shape
     out = {"F": math.nan, "df1": k - 1, "df2": (k - 1) * (b - 1), "p": math.nan, "eta2": math.nan,
-           "block_share": math.nan, "k": k, "b": b}
+           "block_share": math.nan, "ms_error": math.nan, "k": k, "b": b}
     if k < 2 or b < 2:
         return out
     grand = y.mean()
@@ -186,6 +187,7 @@ def block_anova(table) -> dict:
     if ss_total <= 0:
         return out
     out["block_share"] = float(ss_block / ss_total)
+    out["ms_error"] = float(ss_error / out["df2"])
     out["eta2"] = float(ss_treat / (ss_treat + ss_error)) if ss_treat + ss_error > 0 else math.nan
     # The residual of an exactly additive table is 0 up to rounding of the sums above.
     if ss_error <= 1e-12 * ss_total:

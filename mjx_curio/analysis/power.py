@@ -25,7 +25,7 @@ import math
 
 import numpy as np
 
-from mjx_curio.analysis.claims import ALPHA, Tested, block_anova, claim_results, t_pvalue
+from mjx_curio.analysis.claims import ALPHA, Tested, _finite, _num, block_anova, claim_results, t_pvalue
 from mjx_curio.analysis.tables import Table
 
 POWER = 0.8
@@ -81,8 +81,8 @@ def design(tested: Tested, seeds: float) -> tuple[float, float]:
     if tested.blocked:
         # One temperature against another within the blocked design: the error variance is the
         # residual mean square of `block_anova`, with its degrees of freedom.
-        k = np.asarray(tested.x).shape[0]
-        return math.sqrt(2.0 * _residual_ms(tested.x) / seeds), (k - 1) * (seeds - 1)
+        a = block_anova(tested.x)
+        return math.sqrt(2.0 * a["ms_error"] / seeds), (a["k"] - 1) * (seeds - 1)
     vx = _var(tested.x)
     if tested.y is None:
         return math.sqrt(vx / n), n - 1
@@ -108,7 +108,7 @@ def effect(tested: Tested) -> float:
 def seeds_now(tested: Tested) -> int:
     """The seeds a group ran: complete blocks, or finite runs (the smaller side) per seed."""
     if tested.blocked:
-        return _complete_blocks(tested.x).shape[1]
+        return block_anova(tested.x)["b"]
     n = len(_finite(tested.x)) if tested.y is None else min(len(_finite(tested.x)), len(_finite(tested.y)))
     return n // tested.runs_per_seed
 
@@ -189,11 +189,6 @@ def power_table(sweeps) -> Table:
 # ---------------------------------------------------------------------------------- helpers
 
 
-def _finite(x) -> np.ndarray:
-    x = np.asarray(x, float).reshape(-1)
-    return x[np.isfinite(x)]
-
-
 def _var(x) -> float:
     x = _finite(x)
     return float(x.var(ddof=1)) if len(x) >= 2 else math.nan
@@ -204,19 +199,9 @@ def _complete_blocks(table) -> np.ndarray:
     return y[:, np.isfinite(y).all(axis=0)]
 
 
-def _residual_ms(table) -> float:
-    """The residual mean square of `block_anova` on `table` (treatments x blocks)."""
-    y = _complete_blocks(table)
-    a = block_anova(y)
-    if not a["df2"] > 0:
-        return math.nan
-    resid = y - y.mean(axis=1, keepdims=True) - y.mean(axis=0, keepdims=True) + y.mean()
-    return float((resid ** 2).sum() / a["df2"])
-
-
 def _spread(t: Tested) -> str:
     if t.blocked:
-        return f"{_g(math.sqrt(_residual_ms(t.x)))} (residual)"
+        return f"{_g(math.sqrt(block_anova(t.x)['ms_error']))} (residual)"
     if t.y is None:
         return _g(math.sqrt(_var(t.x)))
     return f"{_g(math.sqrt(_var(t.x)))}, {_g(math.sqrt(_var(t.y)))}"
@@ -240,7 +225,3 @@ def _g(x: float) -> str:
         return "n/a"
     return f"{x:,.0f}" if abs(x) >= 100 else f"{x:.3g}"
 
-
-def _num(x):
-    x = float(x)
-    return x if math.isfinite(x) else None
