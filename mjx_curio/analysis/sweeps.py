@@ -419,9 +419,10 @@ def merge_sweeps(parts: Sequence[Sweep], differ: Sequence[str] = ()) -> Sweep:
     a preset's first 3 seeds and, later, `first_seed=3 seeds=5` more in another directory. They
     must agree in every key the results depend on but `seeds` and `first_seed`
     (`plan.result_values`) and may not repeat a run (policy, setting, seed). The runs stand part
-    after part, the parts in order of their first seed (as given where it ties); the windows are those every part has
-    finished; `halted` runs keep their mark. The merged sweep holds metrics only: each part keeps
-    its own checkpoints (`Sweep.parts`). SweepError, naming what differs, where they do not fit.
+    after part, the parts in order of their first seed (as given where it ties); the windows are
+    those every part has finished; `halted` runs keep their mark. The merged sweep holds metrics
+    only: each part keeps its own checkpoints (`Sweep.parts`). SweepError, naming what differs,
+    where they do not fit.
 
     `differ`: more keys the parts may differ in, for parts that each ran a piece of one grid, e.g.
     `("temperature", "preset")` for the paper's Boltzmann temperatures and the low ones, read as
