@@ -146,12 +146,27 @@ TEMPERATURE_PRESETS = ("boltzmann_temperatures", "boltzmann_low_temperatures")
 
 
 def temperatures_block(presets: dict) -> str:
-    """Per Boltzmann temperature sweep snapshotted, `analysis.temperature_table`."""
+    """Per Boltzmann temperature sweep snapshotted, `analysis.temperature_table`; with both, the
+    test across all their temperatures too (the sweeps read as one, `_all_temperatures`); and the
+    same measures for the policies of `multi_agent` (`analysis.policy_measures_table`)."""
     from mjx_curio import analysis as an
 
     parts = [f"`{name}`:\n\n{an.temperature_table(presets[name]).to_markdown()}"
              for name in TEMPERATURE_PRESETS if name in presets]
-    return "\n".join(parts) if parts else "No Boltzmann temperature sweep has been snapshotted yet.\n"
+    if not parts:
+        return "No Boltzmann temperature sweep has been snapshotted yet.\n"
+    if all(name in presets for name in TEMPERATURE_PRESETS):
+        both = _all_temperatures(presets)
+        table = an.temperature_table(both)
+        n_t = len(table.rows) - 1  # the last row is the test across T
+        across = an.Table(table.columns, [[f"across all {n_t} T, blocked by seed", *table.rows[-1][1:]]],
+                          [table.values[-1]])
+        parts.append(f"Both read as one sweep, {n_t} temperatures over the {both.steps_done:,} steps both "
+                     f"ran:\n\n{across.to_markdown()}")
+    if "multi_agent" in presets:
+        parts.append("The same measures for the three policies of the two-agent sweep (`multi_agent`), to set the "
+                     f"temperatures beside them:\n\n{an.policy_measures_table(presets['multi_agent']).to_markdown()}")
+    return "\n".join(parts)
 
 
 def claims_block(presets: dict) -> str:

@@ -313,6 +313,15 @@ def test_temperature_table_on_planted_runs():
     assert t.to_csv().count("\n") == 5
     with pytest.raises(an.SweepError, match="no Boltzmann runs"):
         an.temperature_table(fake_sweep("eps", 2, [("eps", 0.2)], 4))
+    # The same measures per policy: one row a group, the temperature table's rows without the test.
+    p = an.policy_measures_table(s)
+    assert [r[0] for r in p.rows] == [g.label for g in s.groups()] and len(p.rows) == 3
+    assert [r[1:] for r in p.rows] == [r[1:] for r in t.rows[:3]]
+    for got, want in zip(p.values, v[:3]):
+        assert {k: x for k, x in got.items() if k != "policy"} == pytest.approx(
+            {k: x for k, x in want.items() if k != "T"}, nan_ok=True)
+    eps = an.policy_measures_table(fake_sweep("eps", 2, [("eps", 0.2), ("ucb", 1.0)], 4))
+    assert [r[0] for r in eps.rows] == ["ε-greedy (ε=0.2)", "UCB (c=1)"]
 
 def test_seed_coupling_on_planted_actions_and_curiosity():
     # Two temperatures, 3 seeds, 8 windows. Each seed's action counts are its own (seed s takes

@@ -32,6 +32,7 @@ Figure) it is given and returning it:
     headline_table                 mean +- sd across seeds per group of the key numbers
     temperature_table              per Boltzmann temperature: curiosity, action entropy, contacts;
                                    each tested across T, blocked by seed
+    policy_measures_table          the same measures per policy of any sweep
     power_table                    per test of each claim: the seeds it needs, the effect it detects
 
 and the numbers behind them (`moving_average`, `mean_ci`, `cumulative_interactions`,
@@ -62,7 +63,8 @@ temperatures):
               95% CI or p-value, verdict), a `claim_*` function per claim, `assign_presets`, and the
               NumPy tests they use (`welch_t`, `one_way_anova`, `block_anova`, `t_pvalue`, `f_pvalue`, `betainc`)
     temperatures  what a Boltzmann sweep's temperatures change, run by run: `temperature_table`
-              and the `temperature_measures` behind it
+              and the `temperature_measures` behind it; `policy_measures_table`, the same per
+              policy
     power     how many seeds each claim's tests need and the smallest effect they detect:
               `power_table`, and `seeds_needed`, `detectable`, `t_power`, `noncentral_t_sf` behind it
     figures   every `plot_*` function, the colours and labels they share, and saving
@@ -177,7 +179,7 @@ from mjx_curio.analysis.sweeps import (
 )
 from mjx_curio.analysis.tables import Table, headline_table
 from mjx_curio.analysis.power import detectable, noncentral_t_sf, power_table, seeds_needed, t_power
-from mjx_curio.analysis.temperatures import temperature_measures, temperature_table
+from mjx_curio.analysis.temperatures import policy_measures_table, temperature_measures, temperature_table
 
 __all__ = [
     # sweeps
@@ -193,7 +195,7 @@ __all__ = [
     # tables
     "Table", "headline_table",
     # temperatures
-    "temperature_measures", "temperature_table",
+    "policy_measures_table", "temperature_measures", "temperature_table",
     # power
     "detectable", "noncentral_t_sf", "power_table", "seeds_needed", "t_power",
     # claims

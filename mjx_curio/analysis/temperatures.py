@@ -1,5 +1,6 @@
 """What a Boltzmann sweep's temperatures change: one row per temperature T of what its runs did,
-and a last row testing each measure across T, blocked by seed (`temperature_table`).
+and a last row testing each measure across T, blocked by seed (`temperature_table`); the same
+measures per policy of any sweep (`policy_measures_table`), to set the temperatures beside them.
 
 Runs of one seed draw the same random numbers, and where the policy is near-uniform they repeat
 much of each other's course at every T (`claims.seed_coupling`), so each measure's test across T
@@ -47,6 +48,22 @@ def temperature_measures(sweep: Sweep, late_fraction: float = 0.25) -> dict[str,
     }
 
 
+def _measure_rows(m: dict[str, np.ndarray], groups, first: list[str], first_values: list[dict]):
+    """Per group: its first cells (`first`, `first_values`), then each measure's mean and 95 % CI
+    across seeds, formatted and as numbers (mean, low, high; F and p NaN)."""
+    rows, values = [], []
+    for g, head, head_values in zip(groups, first, first_values):
+        row, vals = [head, str(g.n)], {**head_values, "runs": g.n}
+        for key, _, fmt in MEASURES:
+            mean, lo, hi, _ = (float(v) for v in mean_ci(m[key][g.indices]))
+            band = f" [{lo:{fmt}}, {hi:{fmt}}]" if math.isfinite(lo) else ""
+            row.append(f"{mean:{fmt}}{band}")
+            vals.update({key: mean, f"{key} low": lo, f"{key} high": hi, f"{key} F": math.nan, f"{key} p": math.nan})
+        rows.append(row)
+        values.append(vals)
+    return rows, values
+
+
 def temperature_table(sweep: Sweep, late_fraction: float = 0.25) -> Table:
     """Per Boltzmann temperature (ascending): each measure's mean and 95 % CI across seeds; last
     row: for each measure, the ANOVA across temperatures blocked by seed, on the seeds that every
@@ -57,16 +74,7 @@ def temperature_table(sweep: Sweep, late_fraction: float = 0.25) -> Table:
         raise SweepError(f"{sweep.path} has no Boltzmann runs")
     m = temperature_measures(sweep, late_fraction)
     columns = ["T", "runs"] + [heading for _, heading, _ in MEASURES]
-    rows, values = [], []
-    for g in groups:
-        row, vals = [f"{g.value:g}", str(g.n)], {"T": float(g.value), "runs": g.n}
-        for key, _, fmt in MEASURES:
-            mean, lo, hi, _ = (float(v) for v in mean_ci(m[key][g.indices]))
-            band = f" [{lo:{fmt}}, {hi:{fmt}}]" if math.isfinite(lo) else ""
-            row.append(f"{mean:{fmt}}{band}")
-            vals.update({key: mean, f"{key} low": lo, f"{key} high": hi, f"{key} F": math.nan, f"{key} p": math.nan})
-        rows.append(row)
-        values.append(vals)
+    rows, values = _measure_rows(m, groups, [f"{g.value:g}" for g in groups], [{"T": float(g.value)} for g in groups])
     n_seeds = seed_table(sweep, groups, m["late_curiosity"]).shape[1]
     row, vals = ["across T, blocked by seed", f"{n_seeds} seeds"], {"T": math.nan, "runs": n_seeds}
     for key, _, _ in MEASURES:
@@ -79,4 +87,16 @@ def temperature_table(sweep: Sweep, late_fraction: float = 0.25) -> Table:
     note = (f"{sweep.name}, {sweep.steps_done:,} steps a run: mean over seeds [95 % CI]; the last row tests each "
             "measure across temperatures after removing each seed's own level (runs of one seed share their "
             "random numbers).")
+    return Table(columns, rows, values, note)
+
+
+def policy_measures_table(sweep: Sweep, late_fraction: float = 0.25) -> Table:
+    """The same measures per group of any sweep (a policy and its setting, in the sweep's order):
+    where the Boltzmann temperatures sit among the other policies. `values`: per row the group's
+    label, runs, and per measure its mean, low and high (F and p NaN)."""
+    groups = sweep.groups()
+    m = temperature_measures(sweep, late_fraction)
+    columns = ["policy", "runs"] + [heading for _, heading, _ in MEASURES]
+    rows, values = _measure_rows(m, groups, [g.label for g in groups], [{"policy": g.label} for g in groups])
+    note = f"{sweep.name}, {sweep.steps_done:,} steps a run: mean over seeds [95 % CI]."
     return Table(columns, rows, values, note)
