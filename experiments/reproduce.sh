@@ -8,8 +8,8 @@
 #                                        # the paper's full scale (see below)
 #
 # Run lengths: STEPS, when given, sets every sweep's; MULTI_STEPS (multi_agent), SINGLE_STEPS
-# (single_agent), TEMPERATURE_STEPS (boltzmann_temperatures) and WALL_STEPS (the wall presets) set
-# one sweep's and win over STEPS. Each sweep is checkpointed every 1,000 steps into
+# (single_agent), TEMPERATURE_STEPS (both temperature presets) and WALL_STEPS (the wall presets)
+# set their sweeps' and win over STEPS. Each sweep is checkpointed every 1,000 steps into
 # runs/paper/<preset>; run the script again after an interruption (a closed session, Ctrl-C, a
 # scheduler's SIGTERM) and every sweep continues from its newest checkpoint (resume=true) instead of
 # starting over. Asking for more steps later continues the same sweeps further. Then the metrics are
@@ -60,10 +60,13 @@ sweep() {  # sweep PRESET STEPS: start it, or continue it where it stopped (or g
 sweep multi_agent "$MULTI_STEPS"
 sweep single_agent "$SINGLE_STEPS"
 sweep boltzmann_temperatures "$TEMPERATURE_STEPS"
+sweep boltzmann_low_temperatures "$TEMPERATURE_STEPS"
 sweep single_agent_walls_different "$WALL_STEPS"
 sweep multi_agent_walls_different "$WALL_STEPS"
 
-"$PY" experiments/temperature_evidence.py runs/paper/boltzmann_temperatures  # needs its newest checkpoint
+# Each needs its sweep's newest checkpoint (the one that keeps the replay buffers).
+"$PY" experiments/temperature_evidence.py runs/paper/boltzmann_temperatures
+"$PY" experiments/temperature_evidence.py runs/paper/boltzmann_low_temperatures
 "$PY" experiments/results.py snapshot runs/paper
 "$PY" experiments/results.py page
 "$PY" experiments/results.py check

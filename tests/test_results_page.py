@@ -178,6 +178,10 @@ def test_page_blocks_on_the_tiny_sweeps(results, tiny_sweeps_dir, tmp_path):
     assert len(list((tmp_path / "all").glob("*.png"))) == len(results._figures()) == 16
     temperatures = results.temperatures_block(presets)
     assert temperatures.count("| across T, blocked by seed |") == 2 and "`boltzmann_low_temperatures`:" in temperatures
+    # With both, the test across all their temperatures (here one sweep standing for both: its own T).
+    n_t = len(presets["multi_agent"].groups("boltzmann"))
+    assert temperatures.count(f"| across all {n_t} T, blocked by seed |") == 1
+    assert "the two-agent sweep (`multi_agent`)" in temperatures and "| ε-greedy (ε=0.2) | 2 |" in temperatures
     # Power from the tests with two seeds' values: the two-agent sweep's groups.
     rows = [r.split(" | ") for r in results.power_block(presets).splitlines()[2:] if r.startswith("| ")]
     assert rows and all(r[5] == "2" for r in rows), rows
@@ -213,10 +217,10 @@ def test_reproduce_refuses_bad_settings_before_any_sweep(setting, message):
 
 @pytest.mark.parametrize("settings, want", [
     ({}, {"multi_agent": 40000, "single_agent": 40000, "boltzmann_temperatures": 40000,
-          "single_agent_walls_different": 15000, "multi_agent_walls_different": 15000}),
+          "boltzmann_low_temperatures": 40000, "single_agent_walls_different": 15000, "multi_agent_walls_different": 15000}),
     ({"STEPS": "80000", "SINGLE_STEPS": "30000"},
      {"multi_agent": 80000, "single_agent": 30000, "boltzmann_temperatures": 80000,
-      "single_agent_walls_different": 80000, "multi_agent_walls_different": 80000}),
+      "boltzmann_low_temperatures": 80000, "single_agent_walls_different": 80000, "multi_agent_walls_different": 80000}),
 ])
 def test_reproduce_run_lengths_per_sweep_and_steps_for_all(settings, want):
     import os
