@@ -49,10 +49,12 @@ DPI = 80
 
 def snapshot(src: str | pathlib.Path, dst: pathlib.Path = SNAPSHOTS) -> list[pathlib.Path]:
     """Copy manifest, progress and metrics of every preset sweep in `src` to `dst/<preset>/`; a
-    preset whose seeds ran as several sweeps (`analysis.merge_sweeps`) has its first part there
-    and each other part in `dst/<preset>.seeds-<first>-<last>/`. Refuses (ValueError, before
-    copying anything) a snapshot that would replace one of another sweep (different command) or
-    one with more steps done."""
+    preset whose seeds ran as several sweeps (`analysis.merge_sweeps`) has the part that starts
+    at seed 0 there and each other part in `dst/<preset>.seeds-<first>-<last>/`. A part's name
+    depends on its own seeds only, so the next seeds of a preset can be snapshotted from a
+    directory that no longer holds the first ones, beside their committed snapshot. Refuses
+    (ValueError, before copying anything) a snapshot that would replace one of another sweep
+    (different command) or one with more steps done."""
     from mjx_curio import analysis as an
 
     presets = an.assign_presets(an.load_sweeps(src))
@@ -60,12 +62,12 @@ def snapshot(src: str | pathlib.Path, dst: pathlib.Path = SNAPSHOTS) -> list[pat
         raise ValueError(f"no sweep in {src} stands for a preset of mjx_curio/presets.toml")
     plan = []
     for preset, merged in presets.items():
-        for i, s in enumerate(merged.parts or (merged,)):
-            if any(t is s for _, t in plan):  # a sweep standing for several presets is copied as the first
+        for s in merged.parts or (merged,):
+            if any(t is s for _, _, t in plan):  # a sweep standing for several presets is copied as the first
                 continue
             seeds = sorted({r.seed for r in s.runs})
-            plan.append((preset if i == 0 else f"{preset}.seeds-{seeds[0]}-{seeds[-1]}", s))
-    for name, s in plan:
+            plan.append((preset, preset if seeds[0] == 0 else f"{preset}.seeds-{seeds[0]}-{seeds[-1]}", s))
+    for preset, name, s in plan:
         target = dst / name
         if (target / "manifest.json").is_file():
             old = an.load(target)
@@ -74,8 +76,16 @@ def snapshot(src: str | pathlib.Path, dst: pathlib.Path = SNAPSHOTS) -> list[pat
                                  f"{s.path} ran {_command(s.manifest)!r}. Move it away first.")
             if old.steps_done > s.steps_done:
                 raise ValueError(f"{target} has {old.steps_done:,} steps done, {s.path} only {s.steps_done:,}")
+        # A preset's parts are read over the steps all of them ran: a part still running would cut
+        # the page's every number of that preset back to its own steps.
+        for other in [dst / preset, *dst.glob(f"{preset}.seeds-*")]:
+            if other != target and (other / "manifest.json").is_file() and an.load(other).steps_done > s.steps_done:
+                raise ValueError(f"{s.path} has {s.steps_done:,} steps done, fewer than {other} "
+                                 f"({an.load(other).steps_done:,}), another part of {preset}: the page would read "
+                                 f"all of {preset} to {s.steps_done:,} steps only. Snapshot it when it has caught up "
+                                 "(other sweeps can be snapshotted one by one: results.py snapshot runs/paper/<sweep>).")
     written = []
-    for name, s in plan:
+    for _, name, s in plan:
         target = dst / name
         tmp = dst / f".{name}.partial"
         shutil.rmtree(tmp, ignore_errors=True)

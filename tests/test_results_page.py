@@ -149,6 +149,19 @@ def test_a_presets_seeds_run_in_two_sweeps_snapshot_as_two_parts_and_load_as_one
         results.load_presets(dst))
     # Snapshotting again replaces each part with itself.
     assert [p.name for p in results.snapshot(src, dst)] == ["multi_agent", "multi_agent.seeds-2-3"]
+    # The next seeds alone (the first ones' run directory gone, their snapshot committed) go beside
+    # that snapshot, not over it, and load with it as one.
+    shutil.rmtree(first)
+    assert [p.name for p in results.snapshot(src, dst)] == ["multi_agent.seeds-2-3"]
+    assert results.load_presets(dst)["multi_agent"].n_runs == 2 * one.n_runs
+    # A part behind the others (still running) is refused: it would cut the preset back to its steps.
+    shutil.rmtree(dst / "multi_agent.seeds-2-3")
+    p = json.loads((more / "progress.json").read_text())
+    p["windows_done"] = one.n_windows // 2
+    (more / "progress.json").write_text(json.dumps(p))
+    with pytest.raises(ValueError, match=r"fewer than .*multi_agent \(200\), another part of multi_agent"):
+        results.snapshot(src, dst)
+    assert sorted(q.name for q in dst.iterdir()) == ["multi_agent"]
 
 
 def test_page_blocks_on_the_tiny_sweeps(results, tiny_sweeps_dir, tmp_path):
