@@ -20,11 +20,12 @@
 #   multi_agent    9 runs x 40,000 steps   5 h 51 min (steps 500-15,000 in 2 h 21 min at 15.5 run-steps/s, 15,000-20,000 in 40 min at 18.7, 20,000-40,000 in 2 h 46 min at 18.1)
 #   single_agent   9 runs x 40,000 steps   3 h 16 min (1 h 14 min to 15,000 steps, then 15,000-40,000 in 2 h 2 min at 30.8 run-steps/s)
 #   boltzmann_temperatures  15 runs x 40,000 steps   9 h 5 min (7,000 steps in 1 h 57 min at 15.3 run-steps/s, 7,000-26,000 in 4 h 22 min at 18.1, 26,000-40,000 in 2 h 47 min at 21.0)
+#   boltzmann_low_temperatures  12 runs x 40,000 steps   7 h 37 min (14,000 steps in 2 h 28 min, 14,000-28,000 in 2 h 51 min, 28,000-40,000 in 2 h 18 min at 17.4 run-steps/s; 15-19 throughout)
 #   single_agent_walls_different  3 runs x 15,000 steps   30 min (25.9 run-steps/s)
 #   multi_agent_walls_different   9 runs x 15,000 steps   59 min (38.3 run-steps/s), on another 2-core AMD
 #                                 EPYC (family 26 model 2, with AVX-512 and bf16): not comparable with the rows above
 #   the page (snapshot, figures, claims)     about 5 s
-#   temperature_evidence.py                 about 1 min
+#   temperature_evidence.py                 about 1 min a sweep
 #
 # The paper's full scale (8 seeds, 80,000 steps, every preset) is a GPU job: install the CUDA
 # extra (pip install -e '.[cuda]') and run
