@@ -26,6 +26,7 @@
 #                                 EPYC (family 26 model 2, with AVX-512 and bf16): not comparable with the rows above
 #   the page (snapshot, figures, claims)     about 5 s
 #   temperature_evidence.py                 about 1 min a sweep
+#   reconstruction_evidence.py              about 2 min a sweep of 9 runs with 4 checkpoints (beside a running sweep)
 #
 # The paper's full scale (8 seeds, 80,000 steps, every preset) is a GPU job: install the CUDA
 # extra (pip install -e '.[cuda]') and run
@@ -68,6 +69,10 @@ sweep multi_agent_walls_different "$WALL_STEPS"
 # Each needs its sweep's newest checkpoint (the one that keeps the replay buffers).
 "$PY" experiments/temperature_evidence.py runs/paper/boltzmann_temperatures
 "$PY" experiments/temperature_evidence.py runs/paper/boltzmann_low_temperatures
+# Figs. 7 (one agent) and 13 (one agent, every wall different), and the two-agent sweep's VAE.
+"$PY" experiments/reconstruction_evidence.py runs/paper/single_agent
+"$PY" experiments/reconstruction_evidence.py runs/paper/single_agent_walls_different
+"$PY" experiments/reconstruction_evidence.py runs/paper/multi_agent
 "$PY" experiments/results.py snapshot runs/paper
 "$PY" experiments/results.py page
 "$PY" experiments/results.py check

@@ -14,13 +14,14 @@ alone. It never replaces a snapshot with a different sweep or with one that has 
 (`mjx_curio.analysis.plot_*`) into docs/figures/results/, and rewrites the generated blocks of
 docs/results.md (between `<!-- generated: NAME -->` and `<!-- end: NAME -->`): the scale of the
 sweeps, the figures with their captions, the claims table (`analysis.claims_table`), the
-seeds each claim's tests need (`analysis.power_table`) and the Boltzmann temperatures measure by
-measure (`analysis.temperature_table`); the rest
+seeds each claim's tests need (`analysis.power_table`), the Boltzmann temperatures measure by
+measure (`analysis.temperature_table`) and the reconstructions' quality over training (from
+docs/results/reconstructions.json, which `reconstruction_evidence.py` writes); the rest
 of the page (what the verdicts mean, why a claim may fail here) is prose and stays as written.
 The claims' numbers also go to docs/results/claims.csv.
 
-`check` recomputes the scale, claims, power and temperatures blocks from the snapshots and exits 1 if
-they differ from the page (the test suite does the same).
+`check` recomputes the scale, claims, power, temperatures and reconstructions blocks from the
+committed results and exits 1 if they differ from the page (the test suite does the same).
 """
 
 from __future__ import annotations
@@ -40,6 +41,7 @@ SNAPSHOTS = ROOT / "experiments" / "results"
 PAGE = ROOT / "docs" / "results.md"
 FIGURES = ROOT / "docs" / "figures" / "results"
 CLAIMS_CSV = ROOT / "docs" / "results" / "claims.csv"
+RECONSTRUCTIONS = ROOT / "docs" / "results" / "reconstructions.json"  # reconstruction_evidence.py writes it
 SNAPSHOT_FILES = ("manifest.json", "progress.json")  # plus metrics/*.npy
 DPI = 80
 
@@ -177,6 +179,62 @@ def temperatures_block(presets: dict) -> str:
         parts.append("The same measures for the three policies of the two-agent sweep (`multi_agent`), to set the "
                      f"temperatures beside them:\n\n{an.policy_measures_table(presets['multi_agent']).to_markdown()}")
     return "\n".join(parts)
+
+
+def reconstructions_table(entry: dict) -> str:
+    """Markdown of one entry of reconstructions.json: per checkpoint, the mean over runs [95 % CI]
+    of the squared error and the edge error on held-out views, and the paired test against the
+    newest checkpoint; with several policies, a table of them at the newest checkpoint."""
+    def cell(c):
+        return f"{c['mean']:.3g} [{c['low']:.3g}, {c['high']:.3g}]"
+
+    def test(c):
+        return f"{c['diff']:+.3g} (p = {c['p']:.2g})" if c["p"] is not None and np.isfinite(c["p"]) else "—"
+
+    lines = [f"`{entry['sweep']}`: each run's VAE on {entry['heldout_frames_per_vae']} views from the other runs' "
+             f"replay buffers at step {entry['replay_step']:,} ({entry['image']} × {entry['image']}); mean over "
+             "runs [95 % CI]; against the newest checkpoint, the mean paired difference and the two-sided paired "
+             "t-test's p.",
+             "",
+             "| checkpoint (step) | runs | squared error per image | minus the newest | edge error | minus the newest |",
+             "|---|---|---|---|---|---|"]
+    for row in entry["summary"]:
+        lines.append(f"| {row['step']:,} | {row['error']['n']} | {cell(row['error'])} | {test(row['error_vs_newest'])} "
+                     f"| {cell(row['edge_error'])} | {test(row['edge_error_vs_newest'])} |")
+    policies = entry.get("by_policy")
+    if policies and len(policies["groups"]) > 1:
+        def p(key):
+            v = policies["anova_p"][key]
+            return f"p = {v:.2g}" if v is not None and np.isfinite(v) else "—"
+
+        lines += ["", f"Per policy at step {entry['step']:,}, beside each run's error on its own training views "
+                  f"(the `recon` metric per image over its last {policies['train_windows']} windows; there the latent "
+                  "is sampled, not its mean); the last row tests across the policies (one-way ANOVA).",
+                  "",
+                  "| policy | runs | held-out squared error per image | held-out edge error | own training views' squared error |",
+                  "|---|---|---|---|---|"]
+        lines += [f"| {g['group']} | {g['error']['n']} | {cell(g['error'])} | {cell(g['edge_error'])} "
+                  f"| {cell(g['train_recon'])} |" for g in policies["groups"]]
+        lines.append(f"| across the policies | | {p('error')} | {p('edge_error')} | {p('train_recon')} |")
+        labels = [g["group"] for g in policies["groups"]]
+        lines += ["", "The held-out squared error per image by whose views were reconstructed (columns) with whose "
+                  "VAE (rows), mean over the pairs of runs (a run's own views left out):", "",
+                  "| VAE of | " + " | ".join(f"views of {h}" for h in labels) + " |", "|---|" + "---|" * len(labels)]
+        lines += [f"| {g['group']} | " + " | ".join(f"{g['on_views_of'][h]:.3g}" for h in labels) + " |"
+                  for g in policies["groups"]]
+    return "\n".join(lines) + "\n"
+
+
+def reconstructions_block(path: pathlib.Path = RECONSTRUCTIONS) -> str:
+    """The newest entry per sweep of reconstructions.json (`reconstructions_table`) and its figure."""
+    entries = json.loads(path.read_text()) if path.exists() else []
+    newest = {}
+    for e in sorted(entries, key=lambda e: e["step"]):
+        newest[e["sweep"]] = e
+    if not newest:
+        return "No sweep's reconstructions have been measured yet (`experiments/reconstruction_evidence.py`).\n"
+    return "\n".join(f"{reconstructions_table(e)}\n![{name}_reconstructions](figures/{name}_reconstructions.png)\n"
+                     for name, e in sorted(newest.items()))
 
 
 def claims_block(presets: dict) -> str:
@@ -443,9 +501,10 @@ def fill(page: str, new: dict[str, str]) -> str:
 
 
 def computed_blocks(presets: dict) -> dict[str, str]:
-    """The blocks that are pure functions of the snapshots' metrics (what `check` compares)."""
+    """The blocks that are pure functions of the committed results: the snapshots' metrics, and
+    reconstructions.json for the reconstructions block (what `check` compares)."""
     return {"scale": scale_block(presets), "claims": claims_block(presets), "power": power_block(presets),
-            "temperatures": temperatures_block(presets)}
+            "temperatures": temperatures_block(presets), "reconstructions": reconstructions_block()}
 
 
 def write_page(src: pathlib.Path = SNAPSHOTS) -> None:

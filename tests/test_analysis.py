@@ -244,6 +244,61 @@ def test_reconstructions(sweep):
     np.testing.assert_array_equal(p["vae"]["fc"]["kernel"], raw["learner"]["vae"]["fc"]["kernel"][2])
 
 
+def test_edge_error():
+    """0 for a perfect reconstruction, exactly 1 for a flat one (no edge kept), between for a blur,
+    above 1 for noise where the real image has no edge; the hand-computed value of a tiny case."""
+    rng = np.random.default_rng(0)
+    real = rng.uniform(size=(4, 12, 12, 3))
+    assert an.edge_error(real, real) == 0.0
+    assert an.edge_error(np.full_like(real, 0.5), real) == pytest.approx(1.0)
+    blurred = (real + np.roll(real, 1, axis=1) + np.roll(real, 1, axis=2)) / 3.0
+    assert 0.0 < an.edge_error(blurred, real) < 1.0
+    step = np.zeros((1, 2, 4, 1))  # 2 rows of 4 pixels, one channel
+    step[..., 2:, :] = 1.0  # rows [0, 0, 1, 1]: an edge of 1 in each row, 2 in all
+    noisy = step.copy()
+    noisy[0, 0, 0, 0] = 0.5  # a new difference of 0.5 along its row and one of 0.5 down its column
+    assert an.edge_error(noisy, step) == pytest.approx((0.5 + 0.5) / 2.0)
+    assert an.edge_error(1.0 - step, step) == pytest.approx(2.0)  # every edge reversed
+    assert np.isnan(an.edge_error(real, np.zeros_like(real)))  # nothing to compare against
+
+
+def test_heldout_slots():
+    np.testing.assert_array_equal(an.heldout_slots(200, 5), [0, 50, 100, 149, 199])
+    np.testing.assert_array_equal(an.heldout_slots(3, 8), [0, 1, 2])
+    assert an.heldout_slots(0, 8).size == 0
+
+
+def test_reconstruction_quality(sweep):
+    """Each run's VAE at each checkpoint on the other runs' replay frames, recomputed here from the
+    replay and the world model's own encode and decode, one run and step at a time."""
+    from mjx_curio import world_model as wm
+
+    q = an.reconstruction_quality(sweep, frames_per_run=4)
+    assert q.steps == [100, 200] and q.replay_step == 200 and q.frames_per_run == 4
+    assert q.error.shape == q.edge_error.shape == (sweep.n_runs, 2)
+    assert np.isfinite(q.error).all() and np.isfinite(q.edge_error).all()
+    replay = sweep.restore_replay(200, keys=("frames", "size"))
+    cfg = sweep.learner_config()
+    run, k = 3, 0
+    slots = an.heldout_slots(int(np.asarray(replay["size"]).reshape(-1)[0]), 4)
+    others = np.concatenate([np.asarray(replay["frames"][j][slots]).reshape((-1, 16, 16, 3))
+                             for j in range(sweep.n_runs) if j != run])
+    assert len(others) == (sweep.n_runs - 1) * 4 * sweep.n_agents
+    vae = sweep.params(q.steps[k], run)["vae"]
+    decoded = np.asarray(wm.decode(cfg, vae, wm.encode(cfg, vae, others)[0]), np.float64)
+    real = others / 255.0
+    np.testing.assert_allclose(q.error[run, k], np.square(decoded - real).sum(axis=(1, 2, 3)).mean(), rtol=1e-5)
+    np.testing.assert_allclose(q.edge_error[run, k], an.edge_error(decoded, real), rtol=1e-5)
+    # Per source run: the same frames' errors, in the runs' order; a run's own frames are not used.
+    per_frame = np.square(decoded - real).sum(axis=(1, 2, 3)).reshape(sweep.n_runs - 1, -1).mean(axis=1)
+    np.testing.assert_allclose(np.delete(q.error_by_source[run, :, k], run), per_frame, rtol=1e-5)
+    assert np.isnan(np.diagonal(q.error_by_source[..., k])).all()
+    np.testing.assert_allclose(np.nanmean(q.error_by_source, axis=1), q.error, rtol=1e-6)
+    assert an.reconstruction_quality(sweep, steps=[200], frames_per_run=4).error.shape == (sweep.n_runs, 1)
+    with pytest.raises(ValueError, match="frames_per_run=0"):
+        an.reconstruction_quality(sweep, frames_per_run=0)
+
+
 def test_action_values(sweep):
     """Every state of the newest replay, each agent's self-model evaluated by a NumPy MLP, and the
     actions read back against the UCB counts the checkpoint keeps (every policy counts them)."""

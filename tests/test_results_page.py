@@ -39,11 +39,11 @@ def test_the_page_is_what_the_committed_metrics_give(results):
     presets = results.load_presets()
     page = results.PAGE.read_text()
     blocks = results.blocks(page)
-    assert set(blocks) == {"scale", "figures", "claims", "power", "temperatures"}
+    assert set(blocks) == {"scale", "figures", "claims", "power", "temperatures", "reconstructions"}
     assert blocks["figures"] == results.figures_block(presets, out=None)
     if presets:  # the CSV's full-precision numbers may differ in the last bit on another CPU's NumPy
         _assert_same_csv(results.CLAIMS_CSV.read_text(), an.claims_table(presets).to_csv())
-    for link in results.re.findall(r"\]\((figures/results/[^)]+\.png)\)", page):
+    for link in results.re.findall(r"\]\((figures/[^)]+\.png)\)", page):
         assert (results.PAGE.parent / link).is_file(), link
 
 
@@ -72,6 +72,43 @@ def test_blocks_are_replaced_and_nothing_else(results):
     assert new == page.replace("old a", "new a")
     with pytest.raises(KeyError, match="c"):
         results.fill(page, {"c": "x\n"})
+
+
+def _reconstruction_entry(sweep: str, step: int, p: float) -> dict:
+    cell = {"mean": 300.0, "low": 290.0, "high": 310.0, "n": 9}
+    test = {"diff": 50.0, "low": 40.0, "high": 60.0, "n": 9, "p": p}
+    rows = [{"step": s, "error": cell, "error_vs_newest": test, "edge_error": cell, "edge_error_vs_newest": test}
+            for s in (500, step)]
+    return {"sweep": sweep, "step": step, "replay_step": step, "frames_per_run": 32, "heldout_frames_per_vae": 512,
+            "image": 64, "steps": [500, step], "summary": rows, "runs": []}
+
+
+def test_reconstructions_block_shows_each_sweeps_newest_entry(results, tmp_path):
+    path = tmp_path / "reconstructions.json"
+    assert results.reconstructions_block(path).startswith("No sweep's reconstructions")
+    entries = [_reconstruction_entry("b", 2_000, 0.01), _reconstruction_entry("a", 40_000, 1e-6),
+               _reconstruction_entry("a", 15_000, 0.5)]
+    path.write_text(json.dumps(entries))
+    block = results.reconstructions_block(path)
+    assert block.index("`a`:") < block.index("`b`:")  # sorted by sweep
+    assert "at step 40,000" in block and "15,000" not in block  # a sweep's newest entry only
+    assert "| 500 | 9 | 300 [290, 310] | +50 (p = 1e-06) |" in block and "| 2,000 | 9 |" in block
+    assert "![a_reconstructions](figures/a_reconstructions.png)" in block
+    entries = [_reconstruction_entry("a", 1_000, float("nan"))]
+    path.write_text(json.dumps(entries))  # json writes NaN for a test with no spread
+    block = results.reconstructions_block(path)
+    assert "| 500 | 9 | 300 [290, 310] | — |" in block and "Per policy" not in block
+    # With several policies: each at the newest checkpoint, the test across them, and who reconstructs whose views.
+    cell = {"mean": 150.0, "low": 140.0, "high": 160.0, "n": 3}
+    entries[0]["by_policy"] = {
+        "train_windows": 50, "anova_p": {"error": 4e-6, "edge_error": 0.5, "train_recon": float("nan")},
+        "groups": [{"group": g, "error": cell, "edge_error": cell, "train_recon": cell,
+                    "on_views_of": {"P": 100.0, "Q": 200.0 + i}} for i, g in enumerate(("P", "Q"))]}
+    path.write_text(json.dumps(entries))
+    block = results.reconstructions_block(path)
+    assert "| P | 3 | 150 [140, 160] | 150 [140, 160] | 150 [140, 160] |" in block
+    assert "| across the policies | | p = 4e-06 | p = 0.5 | — |" in block
+    assert "| VAE of | views of P | views of Q |" in block and "| Q | 100 | 201 |" in block
 
 
 # ---------------------------------------------------------------------- snapshots of tiny sweeps
@@ -249,3 +286,9 @@ def test_reproduce_run_lengths_per_sweep_and_steps_for_all(settings, want):
     assert done.returncode == 0, done.stderr
     got = {m[1]: int(m[2]) for m in re.finditer(r"preset=(\S+) seeds=3 steps=(\d+)", done.stdout)}
     assert got == want
+    # Then the evidence from their checkpoints, then the page.
+    evidence = re.findall(r"experiments/(\w+)_evidence\.py runs/paper/(\w+)", done.stdout)
+    assert evidence == [("temperature", "boltzmann_temperatures"), ("temperature", "boltzmann_low_temperatures"),
+                        ("reconstruction", "single_agent"), ("reconstruction", "single_agent_walls_different"),
+                        ("reconstruction", "multi_agent")]
+    assert done.stdout.rstrip().endswith("experiments/results.py check")

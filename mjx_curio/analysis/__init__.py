@@ -37,8 +37,8 @@ Figure) it is given and returning it:
 
 and the numbers behind them (`moving_average`, `mean_ci`, `cumulative_interactions`,
 `interaction_frequency`, `action_totals`, `observation_classes`, `reconstructions`,
-`action_values`), which the tests check. Loading needs only NumPy (and orbax for checkpoints);
-plotting needs matplotlib.
+`reconstruction_quality`, `action_values`), which the tests check. Loading needs only NumPy (and
+orbax for checkpoints); plotting needs matplotlib.
 
 The package, by job; each module imports only those above it (sweeps none; stats, recon and
 action_values sweeps; tables sweeps and stats; claims sweeps, stats and tables; temperatures
@@ -54,7 +54,8 @@ temperatures):
               `agent_contacts`, `cumulative_interactions`, `interaction_frequency`,
               `action_totals`, `observation_classes`)
     recon     reconstructions: `reconstructions` (a run's VAE restored from its checkpoints,
-              JAX) and the `Reconstructions` it returns
+              JAX) and the `Reconstructions` it returns; `reconstruction_quality` (every run's VAE
+              at every checkpoint on the other runs' replay frames: error and `edge_error`)
     action_values  what a run's self-models predict for every action on the states of its replay
               buffer, and the Boltzmann policy's probabilities there: `action_values` (JAX) and
               the `ActionValues` it returns
@@ -141,7 +142,14 @@ from mjx_curio.analysis.figures import (
     save_text,
     slug,
 )
-from mjx_curio.analysis.recon import Reconstructions, reconstructions
+from mjx_curio.analysis.recon import (
+    ReconstructionQuality,
+    Reconstructions,
+    edge_error,
+    heldout_slots,
+    reconstruction_quality,
+    reconstructions,
+)
 from mjx_curio.analysis.stats import (
     OBS_CLASSES,
     action_totals,
@@ -191,7 +199,8 @@ __all__ = [
     "interaction_frequency", "mean_ci", "mean_sd", "moving_average", "object_contacts", "observation_classes",
     "per_agent_vae_loss", "t_quantile_975",
     # recon, action_values
-    "Reconstructions", "reconstructions", "ActionValues", "action_values",
+    "ReconstructionQuality", "Reconstructions", "heldout_slots", "reconstruction_quality", "reconstructions",
+    "edge_error", "ActionValues", "action_values",
     # tables
     "Table", "headline_table",
     # temperatures
