@@ -410,11 +410,12 @@ def _figures() -> tuple[Figure, ...]:
                "ones read as one sweep over the steps both ran, two agents. One panel a measure, against T (log "
                "scale): claim 7's late curiosity (mean over the last quarter of the steps, squared latent distance, "
                "unitless), the entropy of the action choice over ln 7 (1: every action equally often), the most "
-               "chosen action's share of the steps, and object contacts per 1,000 agent-steps (both agents). Dots: "
+               "chosen action's share of the steps, object contacts per 1,000 agent-steps (both agents), and the "
+               "0.25 m squares of floor an agent stood in at some 20-step window's end (mean of the agents). Dots: "
                "runs; line: mean over {seeds} seeds with 95 % confidence intervals; grey span: the paper's "
                "temperatures; dashed: a uniform choice. Not in the paper.",
-               _one(lambda p, axes: an.plot_temperature_measures(_all_temperatures(p), axes), size=(16, 3.6),
-                    panels=4)),
+               _one(lambda p, axes: an.plot_temperature_measures(_all_temperatures(p), axes), size=(20, 3.6),
+                    panels=5)),
     )
 
 

@@ -262,6 +262,17 @@ def test_edge_error():
     assert np.isnan(an.edge_error(real, np.zeros_like(real)))  # nothing to compare against
 
 
+def test_cells_visited():
+    """Distinct 0.25 m squares at the windows' ends, per run and agent; NaN windows skipped."""
+    pose = np.zeros((2, 6, 2, 3))
+    pose[0, :, 0, 0] = [0.0, 0.1, 0.3, 0.3, -0.1, 0.6]  # squares 0, 0, 1, 1, -1, 2: four
+    pose[0, :, 0, 1] = [0.0, 0.0, 0.0, 0.26, 0.0, 0.0]  # the fourth window moves up a square: five
+    pose[1, :, 1, :2] = np.nan  # a halted run's blanked windows
+    pose[1, :2, 1, :2] = [[1.0, 1.0], [1.0, 1.2]]
+    np.testing.assert_array_equal(an.cells_visited(pose), [[5, 1], [1, 1]])
+    np.testing.assert_array_equal(an.cells_visited(pose, cell=1.0), [[2, 1], [1, 1]])
+
+
 def test_heldout_slots():
     np.testing.assert_array_equal(an.heldout_slots(200, 5), [0, 50, 100, 149, 199])
     np.testing.assert_array_equal(an.heldout_slots(3, 8), [0, 1, 2])
@@ -370,7 +381,7 @@ def test_every_figure_draws(sweep, single, tmp_path):
     an.plot_losses(sweep, axes)
     assert all(_has_data(ax) for ax in axes)
     plt.close(fig)
-    fig, axes = plt.subplots(1, 4)
+    fig, axes = plt.subplots(1, 5)
     an.plot_temperature_measures(sweep, axes)
     assert all(_has_data(ax) and ax.get_title() and ax.get_xscale() == "log" for ax in axes)
     plt.close(fig)

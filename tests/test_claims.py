@@ -296,6 +296,11 @@ def test_temperature_table_on_planted_runs():
     for i in range(9):
         s.metrics["contact_object"][i, 0, :, 0] = i + 1
     late = np.array([1.0, 2, 3, 2, 3, 4, 3, 4, 6])  # per run; seed s adds s, T adds its index
+    # Floor: run i's first agent steps 0.3 m along x every window for its first i + 2 windows, then
+    # stays (i + 2 squares of 0.25 m, the last position repeated); the second agent never moves (1).
+    pose = s.metrics["agent_pose"]
+    for i in range(9):
+        pose[i, :, 0, 0] = 0.3 * np.minimum(np.arange(10), i + 1) + 0.01
     s.metrics["curiosity"][:] = 9.0
     s.metrics["curiosity"][:, -3:, :] = late[:, None, None]  # the last quarter of 10 windows: 3
     t = an.temperature_table(s)
@@ -306,6 +311,8 @@ def test_temperature_table_on_planted_runs():
     per_run = 1000 * 2 * (np.arange(9) + 1) / (10 * 14 * 2)  # both agents touch; 280 agent-steps a run
     assert [r["object_contacts"] for r in v[:3]] == pytest.approx(per_run.reshape(3, 3).mean(axis=1))
     assert [r["late_curiosity"] for r in v[:3]] == pytest.approx(late.reshape(3, 3).mean(axis=1))
+    floor = ((np.arange(9) + 2 + 1) / 2).reshape(3, 3).mean(axis=1)  # mean of the agents' squares
+    assert [r["floor_cells"] for r in v[:3]] == pytest.approx(floor)
     want = cl.block_anova(late.reshape(3, 3))
     assert (v[3]["late_curiosity F"], v[3]["late_curiosity p"]) == (pytest.approx(want["F"]), pytest.approx(want["p"]))
     assert t.rows[3][2] == f"F(2, 4) = {want['F']:.3g}, p = {want['p']:.3g}" and t.rows[3][1] == "3 seeds"

@@ -18,7 +18,7 @@ Figure) it is given and returning it:
     plot_curiosity                 figs 8, 15, 17, 18, 20: curiosity per agent, raw + moving average
     plot_curiosity_groups          fig 11: curiosity per policy
     plot_temperatures              fig 19: Boltzmann temperatures compared
-    plot_temperature_measures      what T changes (curiosity, action entropy, contacts), over decades of T
+    plot_temperature_measures      what T changes (curiosity, action choice, contacts, roaming), over decades of T
     plot_single_vs_multi           fig 23: curiosity, single- vs multi-agent sweep
     plot_vae_single_vs_multi       fig 24: VAE loss, single- vs multi-agent sweep
     plot_cumulative_interactions   figs 21 (objects), 22 (agent-agent), normalised to the maximum
@@ -51,7 +51,7 @@ temperatures):
               its manifest
     stats     statistics: `t_quantile_975`, `mean_ci`, `mean_sd`, `moving_average`, `bin_windows`
               and the numbers the figures draw (`per_agent_vae_loss`, `object_contacts`,
-              `agent_contacts`, `cumulative_interactions`, `interaction_frequency`,
+              `agent_contacts`, `cells_visited`, `cumulative_interactions`, `interaction_frequency`,
               `action_totals`, `observation_classes`)
     recon     reconstructions: `reconstructions` (a run's VAE restored from its checkpoints,
               JAX) and the `Reconstructions` it returns; `reconstruction_quality` (every run's VAE
@@ -155,6 +155,7 @@ from mjx_curio.analysis.stats import (
     action_totals,
     agent_contacts,
     bin_windows,
+    cells_visited,
     cumulative_interactions,
     interaction_frequency,
     mean_ci,
@@ -195,7 +196,7 @@ __all__ = [
     "find_sweeps", "learner_config", "load", "load_sweeps", "merge_sweeps", "pick_single_multi", "run_config",
     "run_specs",
     # stats
-    "OBS_CLASSES", "action_totals", "agent_contacts", "bin_windows", "cumulative_interactions",
+    "OBS_CLASSES", "action_totals", "agent_contacts", "bin_windows", "cells_visited", "cumulative_interactions",
     "interaction_frequency", "mean_ci", "mean_sd", "moving_average", "object_contacts", "observation_classes",
     "per_agent_vae_loss", "t_quantile_975",
     # recon, action_values

@@ -389,7 +389,8 @@ def plot_boltzmann_greediness(sweep: Sweep, ax, runs: Sequence[int] | None = Non
 def plot_temperature_measures(sweep: Sweep, axes, paper_range=(0.5, 2.5), late_fraction: float = 0.25):
     """What the Boltzmann temperature changes, against T (log scale): one panel per measure of
     `temperatures.MEASURES` (claim 7's late curiosity, the action entropy over ln(actions), the
-    most chosen action's share, object contacts per 1,000 agent-steps), each run a dot and each
+    most chosen action's share, object contacts per 1,000 agent-steps, floor squares visited per
+    agent), each run a dot and each
     T's mean over seeds with its 95% confidence interval; grey span: `paper_range`; dashed: what a
     uniform choice gives. Made for temperatures spanning decades, e.g. the paper's Boltzmann sweep
     and the low-temperature one read as one (`merge_sweeps(..., differ=("temperature", "preset"))`)."""

@@ -117,6 +117,21 @@ def agent_contacts(sweep: Sweep) -> np.ndarray:
     return sweep.metrics["contact_agent"].max(axis=2)
 
 
+def cells_visited(pose, cell: float = 0.25) -> np.ndarray:
+    """How much of the floor each agent went over: the number of distinct `cell` x `cell` m
+    squares its position fell in at the windows' ends. `pose` [runs, windows, agents, 3] (x, y,
+    heading; the `agent_pose` metric, NaN windows skipped) -> [runs, agents]. Sampled every window
+    (20 steps), so it counts where an agent was, not every square it crossed."""
+    pose = np.asarray(pose, float)
+    out = np.zeros(pose.shape[0:1] + pose.shape[2:3], int)
+    for r in range(pose.shape[0]):
+        for a in range(pose.shape[2]):
+            xy = pose[r, :, a, :2]
+            xy = xy[np.isfinite(xy).all(axis=1)]
+            out[r, a] = len(np.unique(np.floor(xy / cell).astype(np.int64), axis=0))
+    return out
+
+
 def cumulative_interactions(sweep: Sweep, kind: str = "object", groups: Sequence[Group] | None = None) -> dict:
     """Cumulative interactions per group, normalised to the global maximum (paper figs 21, 22).
 

@@ -14,7 +14,7 @@ import math
 import numpy as np
 
 from mjx_curio.analysis.claims import block_anova, late_curiosity, seed_table
-from mjx_curio.analysis.stats import mean_ci, object_contacts
+from mjx_curio.analysis.stats import cells_visited, mean_ci, object_contacts
 from mjx_curio.analysis.sweeps import Sweep, SweepError
 from mjx_curio.analysis.tables import Table
 
@@ -25,6 +25,7 @@ MEASURES = (
     ("action_entropy", "action entropy / ln 7", ".5f"),
     ("top_share", "most chosen action's share", ".4f"),
     ("object_contacts", "object contacts per 1,000 agent-steps", ".3g"),
+    ("floor_cells", "floor squares visited (0.25 m), per agent", ".3g"),
 )
 
 
@@ -34,7 +35,8 @@ def temperature_measures(sweep: Sweep, late_fraction: float = 0.25) -> dict[str,
     agents pooled: `action_entropy`, the entropy of the action shares over ln(number of actions)
     (1: every action equally often); `top_share`, the most chosen action's share of the steps;
     `object_contacts`, agent-object contact steps (summed over agents and objects) per 1,000
-    agent-steps."""
+    agent-steps; `floor_cells`, the 0.25 m squares of floor an agent was in at the windows' ends
+    (`stats.cells_visited`), mean of the agents: how far it roamed, and so how varied its views."""
     counts = sweep.metrics["action_counts"].astype(float).sum(axis=(1, 2))  # [runs, actions]
     shares = counts / np.maximum(counts.sum(axis=1, keepdims=True), 1)
     with np.errstate(divide="ignore", invalid="ignore"):
@@ -45,6 +47,7 @@ def temperature_measures(sweep: Sweep, late_fraction: float = 0.25) -> dict[str,
         "action_entropy": -plogp.sum(axis=1) / math.log(shares.shape[1]),
         "top_share": shares.max(axis=1),
         "object_contacts": 1000 * object_contacts(sweep).astype(float).sum(axis=1) / np.maximum(agent_steps, 1),
+        "floor_cells": cells_visited(sweep.metrics["agent_pose"]).mean(axis=1).astype(float),
     }
 
 
