@@ -127,7 +127,21 @@ def evidence(path: str) -> dict:
     return entry
 
 
+def main(argv: list[str]) -> int:
+    """Bad input (no such sweep, no checkpoints or replay buffers) is a one-line message and exit
+    status 2, before anything is written."""
+    from mjx_curio.analysis import SweepError
+
+    if len(argv) != 1:
+        print(__doc__.split("\n\n")[1], file=sys.stderr)
+        return 2
+    try:
+        evidence(argv[0])
+    except SweepError as err:
+        print(f"reconstruction_evidence.py: {err}", file=sys.stderr)
+        return 2
+    return 0
+
+
 if __name__ == "__main__":
-    if len(sys.argv) != 2:
-        raise SystemExit(__doc__)
-    evidence(sys.argv[1])
+    sys.exit(main(sys.argv[1:]))

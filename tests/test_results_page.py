@@ -111,6 +111,21 @@ def test_reconstructions_block_shows_each_sweeps_newest_entry(results, tmp_path)
     assert "| VAE of | views of P | views of Q |" in block and "| Q | 100 | 201 |" in block
 
 
+def test_reconstruction_evidence_refuses_a_sweep_without_checkpoints(tiny_sweep, tmp_path, capsys):
+    spec = importlib.util.spec_from_file_location("mjx_curio_reconstruction_evidence",
+                                                  ROOT / "experiments" / "reconstruction_evidence.py")
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    module.OUT, module.FIGURES = tmp_path / "out" / "reconstructions.json", tmp_path / "out"
+    assert module.main([str(tmp_path / "nowhere")]) == 2
+    assert "does not exist" in capsys.readouterr().err
+    metrics_only = _copy_sweep(tiny_sweep, tmp_path / "metrics_only")  # what a snapshot keeps
+    assert module.main([str(metrics_only)]) == 2
+    assert "reconstruction_evidence.py:" in capsys.readouterr().err
+    assert module.main([]) == 2 and "reconstruction_evidence.py runs/paper" in capsys.readouterr().err
+    assert not (tmp_path / "out").exists()  # nothing written
+
+
 # ---------------------------------------------------------------------- snapshots of tiny sweeps
 
 
