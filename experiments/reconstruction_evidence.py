@@ -114,9 +114,9 @@ def evidence(path: str) -> dict:
     OUT.write_text(json.dumps(sorted(saved, key=lambda e: (e["sweep"], e["step"])), indent=2) + "\n")
 
     shown = list(dict.fromkeys([q.steps[0]] + [s for s in q.steps if s == FIGURE_STEP] + [q.steps[-1]]))
-    fig = plt.figure(figsize=(9.0, 1.2 + 1.1 * len(shown)))
+    fig = plt.figure(figsize=(9.0, 1.0 + 1.25 * len(shown)))
     an.plot_reconstructions(sweep, fig, run=0, steps=shown, n_frames=8)
-    fig.tight_layout(rect=(0, 0, 1, 0.9))  # room for the two-line title
+    fig.subplots_adjust(left=0.07, right=0.99, bottom=0.02, top=0.8, wspace=0.08, hspace=0.12)  # the title on top
     figure = FIGURES / f"{sweep.name}_reconstructions.png"
     fig.savefig(figure, dpi=110)
     sys.path.insert(0, str(pathlib.Path(__file__).resolve().parent))
