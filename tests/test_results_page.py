@@ -126,6 +126,38 @@ def test_reconstruction_evidence_refuses_a_sweep_without_checkpoints(tiny_sweep,
     assert not (tmp_path / "out").exists()  # nothing written
 
 
+def test_reconstruction_evidence_policies_and_paired_test_on_planted_numbers(tiny_sweep):
+    """Planted errors: run i's VAE on run j's views costs 100 * (i's group) + (j's group); the
+    per-policy table must average exactly the pairs of other runs, and the paired test must be
+    Student's t on the differences."""
+    spec = importlib.util.spec_from_file_location("mjx_curio_reconstruction_evidence2",
+                                                  ROOT / "experiments" / "reconstruction_evidence.py")
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    sweep = an.load(tiny_sweep)
+    groups = sweep.groups()
+    gid = np.empty(sweep.n_runs, int)
+    for k, g in enumerate(groups):
+        gid[g.indices] = k
+    by_source = (100.0 * gid[:, None] + gid[None, :])[..., None].repeat(2, axis=2)
+    idx = np.arange(sweep.n_runs)
+    by_source[idx, idx] = np.nan
+    error = np.nanmean(by_source, axis=1) + 0.5 * (idx % 2)[:, None]  # a little spread within each group
+    q = an.ReconstructionQuality([100, 200], 200, 4, error, error / 100, by_source)
+    out = module.by_policy(sweep, q)
+    for k, g in enumerate(out["groups"]):
+        assert g["group"] == groups[k].label
+        assert g["on_views_of"] == {h.label: pytest.approx(100.0 * k + m) for m, h in enumerate(groups)}
+        assert g["error"]["mean"] == pytest.approx(error[groups[k].indices, -1].mean())
+    assert out["anova_p"]["error"] < 1e-6  # the groups differ by 100 with a spread below 4
+    d = np.array([3.0, 5.0, 4.0, 8.0])
+    t = module.paired(d + 10.0, np.full(4, 10.0))
+    want_t = d.mean() / (d.std(ddof=1) / 2.0)
+    assert t["diff"] == pytest.approx(d.mean()) and t["n"] == 4
+    assert t["p"] == pytest.approx(an.t_pvalue(want_t, 3))
+    assert math.isnan(module.paired(np.ones(3), np.ones(3))["p"])  # no spread, no test
+
+
 # ---------------------------------------------------------------------- snapshots of tiny sweeps
 
 
