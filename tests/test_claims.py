@@ -194,6 +194,37 @@ def test_one_experiments_seeds_from_several_sweeps_merge_into_one():
         cl.assign_presets([a, d])
 
 
+def test_join_seed_parts_merges_each_experiments_parts_and_keeps_the_rest_apart():
+    a = fake_sweep("multi_agent", 2, POLICIES, 6, seeds=3, preset="multi_agent")
+    single = fake_sweep("single_agent", 1, POLICIES, 6, seeds=3, preset="single_agent")
+    b = fake_sweep("multi_agent.seeds-3-5", 2, POLICIES, 5, seeds=3, preset="multi_agent", first_seed=3)
+    c = fake_sweep("multi_agent.seeds-6-7", 2, POLICIES, 6, seeds=2, preset="multi_agent", first_seed=6)
+    rerun = fake_sweep("rerun", 2, [("ucb", 1.0)], 6, seeds=1, preset="multi_agent", first_seed=4)
+    bigger = fake_sweep("bigger", 2, POLICIES, 6, seeds=3, preset="multi_agent", first_seed=8)
+    bigger.manifest["run_config"]["image"] = 32
+    for s in (a, b, c):
+        s.metrics["curiosity"][:] = s.runs[0].seed + np.arange(s.n_runs)[:, None, None]
+        s.manifest["config"]["steps"] = 120  # what the fakes lack for `describe`
+    got = an.join_seed_parts([c, single, a, rerun, b, bigger])
+    # One experiment's three parts stand where its first sweep stood, as one sweep of seeds 0-7.
+    assert [s.name for s in got] == ["multi_agent.seeds-0-7", "single_agent", "rerun", "bigger"]
+    merged = got[0]
+    assert merged.parts == (a, b, c) and merged.n_runs == 24 and merged.n_windows == 5
+    assert [g.n for g in merged.groups()] == [8, 8, 8]
+    np.testing.assert_array_equal(merged.metrics["curiosity"][:9, 0, 0], np.arange(9))
+    np.testing.assert_array_equal(merged.metrics["curiosity"][9:, 0, 0], np.r_[3 + np.arange(9), 6 + np.arange(6)])
+    # A run repeated (UCB, seed 4) is a rerun, not more seeds; other settings are another experiment.
+    assert got[1] is single and got[2] is rerun and got[3] is bigger
+    lines = merged.describe().splitlines()
+    assert lines[0].startswith("multi_agent.seeds-0-7, merged from 3 sweeps: 24 runs, 2 agents")
+    assert "steps done 100 of 120" in lines[1] and "x 8" in lines[2]
+    assert lines[3:] == [f"  part {s.path}: seeds {seeds}, steps done {steps}, checkpoints at steps: none"
+                         for s, seeds, steps in ((a, "0, 1, 2", 120), (b, "3, 4, 5", 100), (c, "6, 7", 120))]
+    # Parts named after seeds keep only the experiment's name; one sweep alone is itself.
+    assert an.join_seed_parts([c, b])[0].name == "multi_agent.seeds-3-7"
+    assert an.join_seed_parts([a]) == [a]
+
+
 def test_pieces_of_one_grid_merge_over_the_keys_they_may_differ_in():
     # The paper's temperatures and low ones, the same seeds: one sweep over every temperature.
     paper = fake_sweep("boltzmann_temperatures", 2, [("boltzmann", t) for t in (0.5, 2.5)], 6,

@@ -1,13 +1,15 @@
 """experiments/analysis.ipynb runs end to end (nbclient) on the session's tiny sweeps.
 
-The notebook is pointed at a directory holding a 2-agent and a 1-agent tiny sweep (its one
-parameter, SWEEP). It must run without an error in any cell, and save every figure as a PNG in
+The notebook is pointed at a directory holding a 2-agent and a 1-agent tiny sweep and the 2-agent
+one's next seeds as a sweep of their own (its one parameter, SWEEP). It must run without an error in any cell, and save every figure as a PNG in
 <SWEEP>/figures that is not blank, each also shown inline; its `show` helper refuses a figure with
 an empty panel (analysis.save_figure), so an empty plot fails a cell. The sweeps themselves must
 be left untouched. The notebook is kept in the repository without outputs.
 """
 
+import json
 import pathlib
+import shutil
 
 import mjx_curio  # noqa: F401  (XLA flags before JAX initialises)
 
@@ -44,10 +46,31 @@ def _listing(root: pathlib.Path) -> dict:
     return {str(p.relative_to(root)): (p.stat().st_size, p.stat().st_mtime_ns) for p in root.rglob("*") if p.is_file()}
 
 
-def test_notebook_runs(tiny_sweeps_dir):
+def _more_seeds(sweep: pathlib.Path, out: pathlib.Path, offset: int) -> pathlib.Path:
+    """A copy of `sweep` standing for its experiment's next seeds, run as a sweep of their own
+    (`first_seed=<offset>`): the same files with the runs' seeds moved up by `offset`."""
+    shutil.copytree(sweep, out, symlinks=True)
+    manifest = json.loads((out / "manifest.json").read_text())
+    for r in manifest["runs"]:
+        r["name"] = r["name"].replace(f"s{r['seed']}", f"s{r['seed'] + offset}")
+        r["seed"] += offset
+    manifest["config"]["first_seed"] = offset
+    (out / "manifest.json").write_text(json.dumps(manifest))
+    return out
+
+
+def test_notebook_runs(tiny_sweeps_dir, tmp_path):
     from nbclient import NotebookClient
 
-    sweeps = {name: (tiny_sweeps_dir / name).resolve() for name in ("multi", "single")}
+    # The two tiny sweeps, and the two-agent one's experiment continued by two more seeds in a
+    # sweep of its own: the notebook reads the two parts as one experiment of 4 seeds.
+    parent = tmp_path / "sweeps"
+    parent.mkdir()
+    for name in ("multi", "single"):
+        (parent / name).symlink_to((tiny_sweeps_dir / name).resolve(), target_is_directory=True)
+    _more_seeds((tiny_sweeps_dir / "multi").resolve(), parent / "multi.seeds-2-3", offset=2)
+    tiny_sweeps_dir = parent
+    sweeps = {name: (tiny_sweeps_dir / name).resolve() for name in ("multi", "single", "multi.seeds-2-3")}
     before = {name: _listing(p) for name, p in sweeps.items()}
     nb = _read()
     params = next(c for c in nb.cells if c.cell_type == "code")
@@ -55,15 +78,24 @@ def test_notebook_runs(tiny_sweeps_dir):
     NotebookClient(nb, timeout=600, kernel_name="python3",
                    resources={"metadata": {"path": str(NOTEBOOK.parent)}}).execute()  # raises on a failing cell
 
+    loading = [c for c in nb.cells if c.cell_type == "code"][1]
+    printed = "".join(o.get("text", "") for o in loading.outputs if o.output_type == "stream")
+    assert "multi.seeds-0-3, merged from 2 sweeps: 16 runs, 2 agents" in printed, printed
+    assert "ε-greedy (ε=0.2) x 4" in printed and "part " in printed
+
     figures = tiny_sweeps_dir / "figures"
     pngs = {p.stem: p for p in figures.glob("*.png")}
-    slugs = {"multi": ["eps-eps0.2", "boltzmann-temperature0.5", "boltzmann-temperature1.5", "ucb-ucb_c1"],
+    slugs = {"multi.seeds-0-3": ["eps-eps0.2", "boltzmann-temperature0.5", "boltzmann-temperature1.5", "ucb-ucb_c1"],
              "single": ["eps-eps0.2", "ucb-ucb_c1"]}
-    expected = {"fig23-single-vs-multi-curiosity", "fig24-single-vs-multi-vae", "multi-fig19-temperatures",
-                "multi-boltzmann-greediness", "multi-observational", "multi-temperature-measures"}
+    expected = {"fig23-single-vs-multi-curiosity", "fig24-single-vs-multi-vae", "multi.seeds-0-3-fig19-temperatures",
+                "multi.seeds-0-3-observational", "multi.seeds-0-3-temperature-measures"}
+    # Figures from checkpoints come from each part of the merged sweep, which keeps its own.
+    for part in ("multi", "multi.seeds-2-3"):
+        expected |= {f"{part}-boltzmann-greediness", f"{part}-fig07-reconstructions-run0"}
+    expected.add("single-fig07-reconstructions-run0")
     for s, groups in slugs.items():
         expected |= {f"{s}-fig11-curiosity-policies", f"{s}-fig21-22-cumulative-interactions", f"{s}-fig10-actions",
-                     f"{s}-fig07-reconstructions-run0", f"{s}-losses"}
+                     f"{s}-losses"}
         for g in groups:
             expected |= {f"{s}-fig08-curiosity-{g}", f"{s}-fig09-interactions-{g}", f"{s}-view-fractions-{g}"}
     assert expected == set(pngs), (sorted(expected - set(pngs)), sorted(set(pngs) - expected))

@@ -46,7 +46,8 @@ claims, stats and tables; power claims and tables; figures sweeps, stats, recon,
 temperatures):
 
     sweeps    loading: `load`, `find_sweeps`, `load_sweeps`, `merge_sweeps` (one experiment's seeds
-              from several sweeps), `pick_single_multi`; `Sweep`, `Run`, `Group`, `SweepError`; the
+              from several sweeps), `join_seed_parts` (every such experiment of a list merged),
+              `pick_single_multi`; `Sweep`, `Run`, `Group`, `SweepError`; the
               configs a sweep ran with (`learner_config`, `run_config`, `run_specs`) rebuilt from
               its manifest
     stats     statistics: `t_quantile_975`, `mean_ci`, `mean_sd`, `moving_average`, `bin_windows`
@@ -178,6 +179,7 @@ from mjx_curio.analysis.sweeps import (
     _quiet_orbax,  # video.py reads checkpoints with it
     drop_diverged,
     find_sweeps,
+    join_seed_parts,
     learner_config,
     load,
     load_sweeps,
@@ -193,8 +195,8 @@ from mjx_curio.analysis.temperatures import policy_measures_table, temperature_m
 __all__ = [
     # sweeps
     "FORMAT", "POLICY_LABELS", "SETTINGS", "SWEEP_OUTPUTS", "Group", "Run", "Sweep", "SweepError", "drop_diverged",
-    "find_sweeps", "learner_config", "load", "load_sweeps", "merge_sweeps", "pick_single_multi", "run_config",
-    "run_specs",
+    "find_sweeps", "join_seed_parts", "learner_config", "load", "load_sweeps", "merge_sweeps", "pick_single_multi",
+    "run_config", "run_specs",
     # stats
     "OBS_CLASSES", "action_totals", "agent_contacts", "bin_windows", "cells_visited", "cumulative_interactions",
     "interaction_frequency", "mean_ci", "mean_sd", "moving_average", "object_contacts", "observation_classes",

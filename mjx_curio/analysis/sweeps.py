@@ -26,6 +26,7 @@ import json
 import logging
 import os
 import pathlib
+import re
 from typing import Any, Sequence
 
 import numpy as np
@@ -231,18 +232,26 @@ class Sweep:
     def describe(self) -> str:
         """A few lines about the sweep: what ran, how far it got, what checkpoints exist."""
         cfg = self.manifest["config"]
-        try:
-            ckpts = self.checkpoint_steps()
-        except SweepError:
-            ckpts = []
+
+        def checkpoints(s: Sweep) -> str:
+            try:
+                return ", ".join(map(str, s.checkpoint_steps())) or "none"
+            except SweepError:
+                return "none"
+
         halted = self.progress.get("halted", {})
+        where = f"{self.name}, merged from {len(self.parts)} sweeps" if self.parts else str(self.path)
         lines = [
-            f"{self.path}: {self.n_runs} runs, {self.n_agents} agent{'s' if self.n_agents > 1 else ''}, "
+            f"{where}: {self.n_runs} runs, {self.n_agents} agent{'s' if self.n_agents > 1 else ''}, "
             f"walls={cfg.get('walls')}, image {self.image} px",
             f"  steps done {self.steps_done:,} of {int(cfg['steps']):,} ({self.n_windows} windows of {self.metrics_every})",
             f"  groups: {'; '.join(f'{g.label} x {g.n}' for g in self.groups())}",
-            f"  checkpoints at steps: {', '.join(map(str, ckpts)) or 'none'}",
         ]
+        if self.parts:  # the windows every part has finished; each keeps its own checkpoints
+            lines += [f"  part {p.path}: seeds {', '.join(map(str, sorted({r.seed for r in p.runs})))}, "
+                      f"steps done {p.steps_done:,}, checkpoints at steps: {checkpoints(p)}" for p in self.parts]
+        else:
+            lines.append(f"  checkpoints at steps: {checkpoints(self)}")
         if halted:
             lines.append("  halted runs (non-finite loss or physics): " + ", ".join(f"{self.runs[int(r)].name} at {s}" for r, s in halted.items()))
         return "\n".join(lines)
@@ -481,6 +490,45 @@ def merge_sweeps(parts: Sequence[Sweep], differ: Sequence[str] = ()) -> Sweep:
     merged.name = " + ".join(s.name for s in parts)
     merged.parts = tuple(parts)
     return merged
+
+
+def join_seed_parts(sweeps: Sequence[Sweep]) -> list[Sweep]:
+    """`sweeps` with the parts of one experiment joined: sweeps whose results depend on the same
+    settings but for `seeds` and `first_seed` (a preset's first seeds, then `first_seed=3 seeds=5`
+    more in a directory of their own) become one `merge_sweeps` Sweep, named after its first part
+    with the seeds it holds (`multi_agent.seeds-0-7`), where the first of them stood in `sweeps`.
+    A sweep that repeats a run (policy, setting, seed) of parts with lower first seeds stays
+    apart: it is a rerun, not more seeds. A merged sweep reads its checkpoints from its `parts`."""
+    from mjx_curio.plan import result_values
+
+    def settings(s: Sweep) -> str:
+        values = {k: v for k, v in result_values(s.manifest).items() if k not in ("seeds", "first_seed")}
+        return json.dumps([values, s.manifest["metrics"].get("schema"), s.metrics_every], sort_keys=True, default=str)
+
+    def runs(s: Sweep) -> set:
+        return {(r.policy, r.setting, r.seed) for r in s.runs}
+
+    # Parts join in order of their first seed (the fuller first where they tie), so that which of
+    # two sweeps with a run in common stays apart does not depend on the order given.
+    order = sorted(range(len(sweeps)), key=lambda i: (min((r.seed for r in sweeps[i].runs), default=0),
+                                                      -sweeps[i].n_runs, i))
+    experiments: list[tuple[str, list[int]]] = []
+    for i in order:
+        key = settings(sweeps[i])
+        home = next((parts for k, parts in experiments
+                     if k == key and not runs(sweeps[i]) & set().union(*(runs(sweeps[j]) for j in parts))), None)
+        if home is None:
+            experiments.append((key, [i]))
+        else:
+            home.append(i)
+    joined = []
+    for parts in sorted((parts for _, parts in experiments), key=min):
+        merged = merge_sweeps([sweeps[i] for i in parts])
+        if merged.parts:
+            seeds = sorted({r.seed for r in merged.runs})
+            merged.name = f"{re.sub(r'[.]seeds-[0-9]+-[0-9]+$', '', merged.parts[0].name)}.seeds-{seeds[0]}-{seeds[-1]}"
+        joined.append(merged)
+    return joined
 
 
 def find_sweeps(path: str | pathlib.Path) -> list[pathlib.Path]:
