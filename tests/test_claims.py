@@ -189,6 +189,16 @@ def test_one_experiments_seeds_from_several_sweeps_merge_into_one():
     c.manifest["run_config"]["image"] = 32
     with pytest.raises(an.SweepError, match=r"differ in image \(32 against 16\)"):
         an.merge_sweeps([a, c])
+    # A metric's meaning reworded between the parts is the same array; another dtype is not.
+    entry = {"dtype": "float32", "dims": ["runs", "windows"], "unit": "m", "meaning": "where"}
+    a.manifest["metrics"]["schema"] = {"x": entry}
+    b.manifest["metrics"]["schema"] = {"x": {**entry, "meaning": "where (frozen once halted)"}}
+    assert an.merge_sweeps([a, b]).n_runs == 24
+    b.manifest["metrics"]["schema"] = {"x": {**entry, "dtype": "float16"}}
+    with pytest.raises(an.SweepError, match="record different metrics"):
+        an.merge_sweeps([a, b])
+    for s in (a, b):
+        del s.manifest["metrics"]["schema"]
     d = fake_sweep("again", 2, [("ucb", 1.0)], 5, seeds=1, preset="multi_agent", first_seed=2)
     with pytest.raises(an.SweepError, match="both ran UCB \\(c=1\\) with seed 2"):
         cl.assign_presets([a, d])

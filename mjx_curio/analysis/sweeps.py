@@ -454,8 +454,7 @@ def merge_sweeps(parts: Sequence[Sweep], differ: Sequence[str] = ()) -> Sweep:
         if diff:
             raise SweepError(f"{s.path} and {first.path} are not seeds of one experiment: they differ in "
                              + "; ".join(f"{k} ({got.get(k)!r} against {want.get(k)!r})" for k in diff))
-        if s.manifest["metrics"].get("schema") != first.manifest["metrics"].get("schema") or \
-                s.metrics_every != first.metrics_every:
+        if _arrays(s) != _arrays(first) or s.metrics_every != first.metrics_every:
             raise SweepError(f"{s.path} and {first.path} record different metrics")
         for r in s.runs:
             key = (r.policy, r.setting, r.seed)
@@ -492,6 +491,13 @@ def merge_sweeps(parts: Sequence[Sweep], differ: Sequence[str] = ()) -> Sweep:
     return merged
 
 
+def _arrays(s: Sweep) -> dict:
+    """What the metrics arrays are (dtype, dims, unit), without their `meaning`, whose wording
+    may have grown between the sweeps of one experiment."""
+    schema = s.manifest["metrics"].get("schema") or {}
+    return {k: {f: v.get(f) for f in ("dtype", "dims", "unit")} for k, v in schema.items()}
+
+
 def join_seed_parts(sweeps: Sequence[Sweep]) -> list[Sweep]:
     """`sweeps` with the parts of one experiment joined: sweeps whose results depend on the same
     settings but for `seeds` and `first_seed` (a preset's first seeds, then `first_seed=3 seeds=5`
@@ -503,7 +509,7 @@ def join_seed_parts(sweeps: Sequence[Sweep]) -> list[Sweep]:
 
     def settings(s: Sweep) -> str:
         values = {k: v for k, v in result_values(s.manifest).items() if k not in ("seeds", "first_seed")}
-        return json.dumps([values, s.manifest["metrics"].get("schema"), s.metrics_every], sort_keys=True, default=str)
+        return json.dumps([values, _arrays(s), s.metrics_every], sort_keys=True, default=str)
 
     def runs(s: Sweep) -> set:
         return {(r.policy, r.setting, r.seed) for r in s.runs}
