@@ -178,6 +178,7 @@ def test_one_experiments_seeds_from_several_sweeps_merge_into_one():
     np.testing.assert_array_equal(merged.metrics["curiosity"][:, 0, 0], np.r_[np.arange(9), 100 + np.arange(15)])
     assert merged.progress["halted"] == {"13": 60} and merged.steps_done == 100
     assert merged.manifest["config"]["seeds"] == 8 and merged.manifest["config"]["first_seed"] == 0
+    assert merged.name == "multi_agent.seeds-0-7"  # named by its seeds, not its parts' directories
     with pytest.raises(an.SweepError, match="each keeps its own checkpoints"):
         merged.checkpoints()
     # A preset recorded by several sweeps is served by them merged; one sweep alone is itself.
@@ -232,6 +233,7 @@ def test_join_seed_parts_merges_each_experiments_parts_and_keeps_the_rest_apart(
                          for s, seeds, steps in ((a, "0, 1, 2", 120), (b, "3, 4, 5", 100), (c, "6, 7", 120))]
     # Parts named after seeds keep only the experiment's name; one sweep alone is itself.
     assert an.join_seed_parts([c, b])[0].name == "multi_agent.seeds-3-7"
+    assert an.join_seed_parts([c, a])[0].name == "multi_agent.seeds-0-2+6-7"  # a gap is named, not bridged
     assert an.join_seed_parts([a]) == [a]
 
 

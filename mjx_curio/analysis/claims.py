@@ -926,7 +926,8 @@ def claims_table(sweeps) -> Table:
     values = [{"key": r.key, "claim": r.claim, "verdict": r.verdict, **r.values} for r in results]
     keys = list(dict.fromkeys(k for v in values for k in v))
     values = [{k: v.get(k) for k in keys} for v in values]
-    used = ", ".join(f"{p} = {s.name}" for p, s in presets.items()) or "none"
+    used = ", ".join(f"{p} = {s.name}" + (f" ({' + '.join(part.name for part in s.parts)})" if s.parts else "")
+                     for p, s in presets.items()) or "none"
     note = (f"Sweeps as presets: {used}. Means are across runs (seeds) with 95% Student-t intervals in brackets; "
             f"p-values two-sided. holds: the paper's effect at the 5% level in its direction (claim 7: no significant "
             f"difference); does not hold: at the needed scale, the effect is not significant (or reversed); not "

@@ -95,7 +95,8 @@ class Sweep:
 
     Attributes:
       path, name: the directory and its name (a merged sweep's: its first part's directory, and
-        its parts' names joined by " + ").
+        `_seeds_name` of the seeds it holds, `multi_agent.seeds-0-7`; parts of a grid merged with
+        `differ`: their names joined by " + ").
       manifest, progress: the parsed manifest.json and progress.json.
       runs: list of `Run`, in the order of the metrics' first axis.
       n_agents, agent_names, actions, objects, view_targets: from the manifest.
@@ -430,8 +431,8 @@ def merge_sweeps(parts: Sequence[Sweep], differ: Sequence[str] = ()) -> Sweep:
     (`plan.result_values`) and may not repeat a run (policy, setting, seed). The runs stand part
     after part, the parts in order of their first seed (as given where it ties); the windows are
     those every part has finished; `halted` runs keep their mark. The merged sweep holds metrics
-    only: each part keeps its own checkpoints (`Sweep.parts`). SweepError, naming what differs,
-    where they do not fit.
+    only: each part keeps its own checkpoints (`Sweep.parts`), and is named by the seeds it holds
+    (`multi_agent.seeds-0-7`). SweepError, naming what differs, where they do not fit.
 
     `differ`: more keys the parts may differ in, for parts that each ran a piece of one grid, e.g.
     `("temperature", "preset")` for the paper's Boltzmann temperatures and the low ones, read as
@@ -486,9 +487,25 @@ def merge_sweeps(parts: Sequence[Sweep], differ: Sequence[str] = ()) -> Sweep:
     progress = {"windows_done": windows, "steps_done": int(steps[-1]) if windows else 0, "halted": halted}
     metrics = {k: np.concatenate([s.metrics[k][:, :windows] for s in parts]) for k in first.metrics}
     merged = Sweep(first.path, manifest, progress, steps, metrics)
-    merged.name = " + ".join(s.name for s in parts)
+    # Seeds of one experiment read as one sweep named by its seeds; pieces of a grid by their parts.
+    merged.name = (" + ".join(s.name for s in parts) if differ
+                   else _seeds_name(parts[0].name, [r.seed for r in merged.runs]))
     merged.parts = tuple(parts)
     return merged
+
+
+def _seeds_name(name: str, seeds: Sequence[int]) -> str:
+    """`name` (less a `.seeds-...` suffix it has) with the seeds held: `multi_agent.seeds-0-7`;
+    seeds with gaps name each run of consecutive ones, `multi_agent.seeds-0-2+5-7`."""
+    seeds = sorted(set(int(x) for x in seeds))
+    spans: list[list[int]] = []
+    for x in seeds:
+        if spans and x == spans[-1][1] + 1:
+            spans[-1][1] = x
+        else:
+            spans.append([x, x])
+    base = re.sub(r"[.]seeds-[0-9+-]+$", "", name)
+    return f"{base}.seeds-" + "+".join(f"{a}-{b}" for a, b in spans)
 
 
 def _arrays(s: Sweep) -> dict:
@@ -529,11 +546,7 @@ def join_seed_parts(sweeps: Sequence[Sweep]) -> list[Sweep]:
             home.append(i)
     joined = []
     for parts in sorted((parts for _, parts in experiments), key=min):
-        merged = merge_sweeps([sweeps[i] for i in parts])
-        if merged.parts:
-            seeds = sorted({r.seed for r in merged.runs})
-            merged.name = f"{re.sub(r'[.]seeds-[0-9]+-[0-9]+$', '', merged.parts[0].name)}.seeds-{seeds[0]}-{seeds[-1]}"
-        joined.append(merged)
+        joined.append(merge_sweeps([sweeps[i] for i in parts]))
     return joined
 
 
