@@ -26,7 +26,8 @@
 # time, measured from the sweeps' own progress lines (run-steps/s = runs x steps per second):
 #   multi_agent    9 runs x 40,000 steps   5 h 51 min (steps 500-15,000 in 2 h 21 min at 15.5 run-steps/s, 15,000-20,000 in 40 min at 18.7, 20,000-40,000 in 2 h 46 min at 18.1)
 #   multi_agent.seeds-3-5  9 runs x 40,000 steps   about 4 h 40 min (19,300 steps in 2 h 29 min, 19,000-40,000 in 2 h 8 min at 24.6 run-steps/s),
-#                          on a 2-core Intel Xeon (lscpu "Intel(R) Xeon(R) Processor", family 6 model 167): not comparable with the rows above
+#   multi_agent.seeds-6-7  6 runs x 40,000 steps   about 2 h 10 min (500 steps in 2 min, then 500-40,000 in 2 h 8 min at about 31 run-steps/s, paused 4 min for a test run),
+#                          both on a 2-core Intel Xeon (lscpu "Intel(R) Xeon(R) Processor", family 6 model 167): not comparable with the rows above
 #   single_agent   9 runs x 40,000 steps   3 h 16 min (1 h 14 min to 15,000 steps, then 15,000-40,000 in 2 h 2 min at 30.8 run-steps/s)
 #   boltzmann_temperatures  15 runs x 40,000 steps   9 h 5 min (7,000 steps in 1 h 57 min at 15.3 run-steps/s, 7,000-26,000 in 4 h 22 min at 18.1, 26,000-40,000 in 2 h 47 min at 21.0)
 #   boltzmann_low_temperatures  12 runs x 40,000 steps   7 h 37 min (14,000 steps in 2 h 28 min, 14,000-28,000 in 2 h 51 min, 28,000-40,000 in 2 h 18 min at 17.4 run-steps/s; 15-19 throughout)
