@@ -234,6 +234,7 @@ def test_join_seed_parts_merges_each_experiments_parts_and_keeps_the_rest_apart(
     # Parts named after seeds keep only the experiment's name; one sweep alone is itself.
     assert an.join_seed_parts([c, b])[0].name == "multi_agent.seeds-3-7"
     assert an.join_seed_parts([c, a])[0].name == "multi_agent.seeds-0-2+6-7"  # a gap is named, not bridged
+    assert an.join_seed_parts([a, rerun])[0].name == "multi_agent.seeds-0-2+4"
     assert an.join_seed_parts([a]) == [a]
 
 

@@ -496,7 +496,8 @@ def merge_sweeps(parts: Sequence[Sweep], differ: Sequence[str] = ()) -> Sweep:
 
 def _seeds_name(name: str, seeds: Sequence[int]) -> str:
     """`name` (less a `.seeds-...` suffix it has) with the seeds held: `multi_agent.seeds-0-7`;
-    seeds with gaps name each run of consecutive ones, `multi_agent.seeds-0-2+5-7`."""
+    seeds with gaps name each run of consecutive ones, `multi_agent.seeds-0-2+5-7`, a lone seed
+    by itself, `multi_agent.seeds-0-2+4`."""
     seeds = sorted(set(int(x) for x in seeds))
     spans: list[list[int]] = []
     for x in seeds:
@@ -505,7 +506,7 @@ def _seeds_name(name: str, seeds: Sequence[int]) -> str:
         else:
             spans.append([x, x])
     base = re.sub(r"[.]seeds-[0-9+-]+$", "", name)
-    return f"{base}.seeds-" + "+".join(f"{a}-{b}" for a, b in spans)
+    return f"{base}.seeds-" + "+".join(f"{a}-{b}" if b > a else f"{a}" for a, b in spans)
 
 
 def _arrays(s: Sweep) -> dict:
