@@ -2,9 +2,9 @@
 # Remake every sweep and figure of docs/results.md from nothing.
 #
 #     bash experiments/reproduce.sh      # the scale of docs/results.md: 3 seeds (8 for the
-#                                        # two-agent experiment); 40,000 steps a run with one or
-#                                        # two agents and for the temperatures, 15,000 for the
-#                                        # wall variants
+#                                        # two-agent experiment, 6 for the one-agent one); 40,000
+#                                        # steps a run with one or two agents and for the
+#                                        # temperatures, 15,000 for the wall variants
 #     SEEDS=8 STEPS=80000 bash experiments/reproduce.sh
 #                                        # the paper's full scale (see below)
 #
@@ -17,9 +17,10 @@
 # copied into experiments/results/ and the page's figures and tables are redrawn from them.
 #
 # Seeds: SEEDS (default 3) per policy or setting of every preset; the two-agent experiment
-# (multi_agent) has MULTI_SEEDS (default 8) in all, its first SEEDS in runs/paper/multi_agent and
-# the rest, as they ran for the page, in sweeps of their own of at most 3 seeds each
-# (runs/paper/multi_agent.seeds-3-5, runs/paper/multi_agent.seeds-6-7: each fits a 3-hour session
+# (multi_agent) has MULTI_SEEDS (default 8) in all and the one-agent experiment (single_agent)
+# SINGLE_SEEDS (default 6), the first SEEDS in runs/paper/<preset> and the rest, as they ran for the
+# page, in sweeps of their own of at most 3 seeds each (runs/paper/multi_agent.seeds-3-5,
+# runs/paper/multi_agent.seeds-6-7, runs/paper/single_agent.seeds-3-5: each fits a 3-hour session
 # on 2 cores), which the page reads with the first as one experiment (analysis.merge_sweeps).
 #
 # Wall time on a 2-core AMD EPYC (lscpu "AMD EPYC", family 25 model 1), CPU only, one sweep at a
@@ -29,6 +30,7 @@
 #   multi_agent.seeds-6-7  6 runs x 40,000 steps   about 2 h 10 min (500 steps in 2 min, then 500-40,000 in 2 h 8 min at about 31 run-steps/s, paused 4 min for a test run),
 #                          both on a 2-core Intel Xeon (lscpu "Intel(R) Xeon(R) Processor", family 6 model 167): not comparable with the rows above
 #   single_agent   9 runs x 40,000 steps   3 h 16 min (1 h 14 min to 15,000 steps, then 15,000-40,000 in 2 h 2 min at 30.8 run-steps/s)
+#   single_agent.seeds-3-5  9 runs x 40,000 steps   2 h 7 min (45-47 run-steps/s), on the 2-core Intel Xeon above: not comparable with the AMD rows
 #   boltzmann_temperatures  15 runs x 40,000 steps   9 h 5 min (7,000 steps in 1 h 57 min at 15.3 run-steps/s, 7,000-26,000 in 4 h 22 min at 18.1, 26,000-40,000 in 2 h 47 min at 21.0)
 #   boltzmann_low_temperatures  12 runs x 40,000 steps   7 h 37 min (14,000 steps in 2 h 28 min, 14,000-28,000 in 2 h 51 min, 28,000-40,000 in 2 h 18 min at 17.4 run-steps/s; 15-19 throughout)
 #   single_agent_walls_different  3 runs x 15,000 steps   30 min (25.9 run-steps/s)
@@ -47,13 +49,14 @@ cd "$(dirname "$0")/.."
 PY=${PYTHON:-.venv/bin/python}
 SEEDS=${SEEDS:-3}
 MULTI_SEEDS=${MULTI_SEEDS:-8}
+SINGLE_SEEDS=${SINGLE_SEEDS:-6}
 STEPS=${STEPS:-}
 MULTI_STEPS=${MULTI_STEPS:-${STEPS:-40000}}
 SINGLE_STEPS=${SINGLE_STEPS:-${STEPS:-40000}}
 TEMPERATURE_STEPS=${TEMPERATURE_STEPS:-${STEPS:-40000}}
 WALL_STEPS=${WALL_STEPS:-${STEPS:-15000}}
 # Bad settings stop here, before any sweep starts (a sweep advances in chunks of 100 steps).
-for knob in SEEDS MULTI_SEEDS STEPS MULTI_STEPS SINGLE_STEPS TEMPERATURE_STEPS WALL_STEPS; do
+for knob in SEEDS MULTI_SEEDS SINGLE_SEEDS STEPS MULTI_STEPS SINGLE_STEPS TEMPERATURE_STEPS WALL_STEPS; do
     value=${!knob}
     [[ $knob == STEPS && -z $value ]] && continue  # STEPS unset: each sweep's own default
     if ! [[ $value =~ ^[1-9][0-9]*$ ]] || { [[ $knob != *SEEDS ]] && (( value % 100 )); }; then
@@ -70,16 +73,21 @@ sweep() {  # sweep PRESET STEPS [FIRST_SEED SEEDS OUT]: start it, or continue it
         checkpoint_every=1000 out="$out" resume="$resume"
 }
 
-sweep multi_agent "$MULTI_STEPS"
-multi_parts=(runs/paper/multi_agent)
-first=$SEEDS
-while (( first < MULTI_SEEDS )); do  # the two-agent experiment's further seeds, 3 at most a sweep
-    n=$(( MULTI_SEEDS - first < 3 ? MULTI_SEEDS - first : 3 ))
-    multi_parts+=("runs/paper/multi_agent.seeds-$first-$(( first + n - 1 ))")
-    sweep multi_agent "$MULTI_STEPS" "$first" "$n" "${multi_parts[-1]}"
-    first=$(( first + n ))
-done
-sweep single_agent "$SINGLE_STEPS"
+seed_parts() {  # seed_parts PRESET STEPS TOTAL PARTS: SEEDS seeds in runs/paper/PRESET, the rest up to TOTAL 3 at most a sweep; PARTS names an array that gets every sweep's folder
+    local preset=$1 steps=$2 total=$3 first=$SEEDS n
+    local -n folders=$4
+    sweep "$preset" "$steps"
+    folders=("runs/paper/$preset")
+    while (( first < total )); do
+        n=$(( total - first < 3 ? total - first : 3 ))
+        folders+=("runs/paper/$preset.seeds-$first-$(( first + n - 1 ))")
+        sweep "$preset" "$steps" "$first" "$n" "${folders[-1]}"
+        first=$(( first + n ))
+    done
+}
+
+seed_parts multi_agent "$MULTI_STEPS" "$MULTI_SEEDS" multi_parts
+seed_parts single_agent "$SINGLE_STEPS" "$SINGLE_SEEDS" single_parts
 sweep boltzmann_temperatures "$TEMPERATURE_STEPS"
 sweep boltzmann_low_temperatures "$TEMPERATURE_STEPS"
 sweep single_agent_walls_different "$WALL_STEPS"
@@ -89,10 +97,8 @@ sweep multi_agent_walls_different "$WALL_STEPS"
 "$PY" experiments/temperature_evidence.py runs/paper/boltzmann_temperatures
 "$PY" experiments/temperature_evidence.py runs/paper/boltzmann_low_temperatures
 # Figs. 7 (one agent) and 13 (one agent, every wall different), and the two-agent sweep's VAE.
-"$PY" experiments/reconstruction_evidence.py runs/paper/single_agent
-"$PY" experiments/reconstruction_evidence.py runs/paper/single_agent_walls_different
-for part in "${multi_parts[@]}"; do  # each part keeps its own checkpoints
-    "$PY" experiments/reconstruction_evidence.py "$part"
+for part in "${single_parts[@]}" runs/paper/single_agent_walls_different "${multi_parts[@]}"; do
+    "$PY" experiments/reconstruction_evidence.py "$part"  # each part keeps its own checkpoints
 done
 "$PY" experiments/results.py snapshot runs/paper
 "$PY" experiments/results.py page
