@@ -86,15 +86,25 @@ def padding(n_runs: int, count: int) -> int:
     return -n_runs % count
 
 
+def _backends_started() -> bool:
+    """Whether JAX's backends already started in this process. JAX has no public way to ask, so
+    this reads a private function; a JAX release without it counts as not started (the flag is
+    then set and simply has no effect on a backend that already runs)."""
+    try:
+        from jax._src import xla_bridge
+
+        return bool(xla_bridge.backends_are_initialized())
+    except (ImportError, AttributeError):
+        return False
+
+
 def apply(count: int, requested="auto") -> int:
     """Make JAX's CPU platform `count` devices; returns the count JAX will have.
 
     Before JAX's backend starts this sets XLA_FLAGS. After it started (a test, a notebook that
     already computed something) the count can no longer change: with `requested="auto"` the
     backend's own count is kept, while a count the user asked for explicitly is an error."""
-    import jax._src.xla_bridge as xla_bridge
-
-    if xla_bridge.backends_are_initialized():
+    if _backends_started():
         import jax
 
         have = len(jax.devices("cpu"))
