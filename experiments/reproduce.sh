@@ -2,7 +2,7 @@
 # Remake every sweep and figure of docs/results.md from nothing.
 #
 #     bash experiments/reproduce.sh      # the scale of docs/results.md: 3 seeds (8 for the
-#                                        # two-agent experiment, 6 for the one-agent one); 40,000
+#                                        # two-agent and the one-agent experiment); 40,000
 #                                        # steps a run with one or two agents and for the
 #                                        # temperatures, 15,000 for the wall variants
 #     SEEDS=8 STEPS=80000 bash experiments/reproduce.sh
@@ -18,10 +18,10 @@
 #
 # Seeds: SEEDS (default 3) per policy or setting of every preset; the two-agent experiment
 # (multi_agent) has MULTI_SEEDS (default 8) in all and the one-agent experiment (single_agent)
-# SINGLE_SEEDS (default 6), the first SEEDS in runs/paper/<preset> and the rest, as they ran for the
-# page, in sweeps of their own of at most 3 seeds each (runs/paper/multi_agent.seeds-3-5,
-# runs/paper/multi_agent.seeds-6-7, runs/paper/single_agent.seeds-3-5: each fits a 3-hour session
-# on 2 cores), which the page reads with the first as one experiment (analysis.merge_sweeps).
+# SINGLE_SEEDS (default 8), the first SEEDS in runs/paper/<preset> and the rest, as they ran for the
+# page, in sweeps of their own of at most 3 seeds each (runs/paper/<preset>.seeds-3-5 and
+# runs/paper/<preset>.seeds-6-7 of both: each fits a 3-hour session on 2 cores), which the page
+# reads with the first as one experiment (analysis.merge_sweeps).
 #
 # Wall time on a 2-core AMD EPYC (lscpu "AMD EPYC", family 25 model 1), CPU only, one sweep at a
 # time, measured from the sweeps' own progress lines (run-steps/s = runs x steps per second):
@@ -31,6 +31,7 @@
 #                          both on a 2-core Intel Xeon (lscpu "Intel(R) Xeon(R) Processor", family 6 model 167): not comparable with the rows above
 #   single_agent   9 runs x 40,000 steps   3 h 16 min (1 h 14 min to 15,000 steps, then 15,000-40,000 in 2 h 2 min at 30.8 run-steps/s)
 #   single_agent.seeds-3-5  9 runs x 40,000 steps   2 h 7 min (45-47 run-steps/s), on the 2-core Intel Xeon above: not comparable with the AMD rows
+#   single_agent.seeds-6-7  6 runs x 40,000 steps   1 h 6 min (61 run-steps/s; 46 while a test ran beside it), on the same Intel Xeon
 #   boltzmann_temperatures  15 runs x 40,000 steps   9 h 5 min (7,000 steps in 1 h 57 min at 15.3 run-steps/s, 7,000-26,000 in 4 h 22 min at 18.1, 26,000-40,000 in 2 h 47 min at 21.0)
 #   boltzmann_low_temperatures  12 runs x 40,000 steps   7 h 37 min (14,000 steps in 2 h 28 min, 14,000-28,000 in 2 h 51 min, 28,000-40,000 in 2 h 18 min at 17.4 run-steps/s; 15-19 throughout)
 #   single_agent_walls_different  3 runs x 15,000 steps   30 min (25.9 run-steps/s)
@@ -49,7 +50,7 @@ cd "$(dirname "$0")/.."
 PY=${PYTHON:-.venv/bin/python}
 SEEDS=${SEEDS:-3}
 MULTI_SEEDS=${MULTI_SEEDS:-8}
-SINGLE_SEEDS=${SINGLE_SEEDS:-6}
+SINGLE_SEEDS=${SINGLE_SEEDS:-8}
 STEPS=${STEPS:-}
 MULTI_STEPS=${MULTI_STEPS:-${STEPS:-40000}}
 SINGLE_STEPS=${SINGLE_STEPS:-${STEPS:-40000}}
