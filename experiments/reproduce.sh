@@ -2,7 +2,8 @@
 # Remake every sweep and figure of docs/results.md from nothing.
 #
 #     bash experiments/reproduce.sh      # the scale of docs/results.md: 3 seeds (8 for the
-#                                        # two-agent and the one-agent experiment); 40,000
+#                                        # two-agent and the one-agent experiment, 6 for
+#                                        # one agent with different walls); 40,000
 #                                        # steps a run with one or two agents and for the
 #                                        # temperatures, 15,000 for the wall variants
 #     SEEDS=8 STEPS=80000 bash experiments/reproduce.sh
@@ -18,10 +19,12 @@
 #
 # Seeds: SEEDS (default 3) per policy or setting of every preset; the two-agent experiment
 # (multi_agent) has MULTI_SEEDS (default 8) in all and the one-agent experiment (single_agent)
-# SINGLE_SEEDS (default 8), the first SEEDS in runs/paper/<preset> and the rest, as they ran for the
-# page, in sweeps of their own of at most 3 seeds each (runs/paper/<preset>.seeds-3-5 and
-# runs/paper/<preset>.seeds-6-7 of both: each fits a 3-hour session on 2 cores), which the page
-# reads with the first as one experiment (analysis.merge_sweeps).
+# SINGLE_SEEDS (default 8), and one agent with a different texture on every wall
+# (single_agent_walls_different) SINGLE_WALL_SEEDS (default 6): the first SEEDS in
+# runs/paper/<preset> and the rest, as they ran for the page, in sweeps of their own of at most 3
+# seeds each (runs/paper/<preset>.seeds-3-5, and runs/paper/<preset>.seeds-6-7 of the first two: each
+# fits a 3-hour session on 2 cores), which the page reads with the first as one experiment
+# (analysis.merge_sweeps).
 #
 # Wall time on a 2-core AMD EPYC (lscpu "AMD EPYC", family 25 model 1), CPU only, one sweep at a
 # time, measured from the sweeps' own progress lines (run-steps/s = runs x steps per second):
@@ -35,6 +38,7 @@
 #   boltzmann_temperatures  15 runs x 40,000 steps   9 h 5 min (7,000 steps in 1 h 57 min at 15.3 run-steps/s, 7,000-26,000 in 4 h 22 min at 18.1, 26,000-40,000 in 2 h 47 min at 21.0)
 #   boltzmann_low_temperatures  12 runs x 40,000 steps   7 h 37 min (14,000 steps in 2 h 28 min, 14,000-28,000 in 2 h 51 min, 28,000-40,000 in 2 h 18 min at 17.4 run-steps/s; 15-19 throughout)
 #   single_agent_walls_different  3 runs x 15,000 steps   30 min (25.9 run-steps/s)
+#   single_agent_walls_different.seeds-3-5  3 runs x 15,000 steps   14 min (56-59 run-steps/s), on the Intel Xeon above
 #   multi_agent_walls_different   9 runs x 15,000 steps   59 min (38.3 run-steps/s), on another 2-core AMD
 #                                 EPYC (family 26 model 2, with AVX-512 and bf16): not comparable with the rows above
 #   the page (snapshot, figures, claims)     about 5 s
@@ -51,13 +55,14 @@ PY=${PYTHON:-.venv/bin/python}
 SEEDS=${SEEDS:-3}
 MULTI_SEEDS=${MULTI_SEEDS:-8}
 SINGLE_SEEDS=${SINGLE_SEEDS:-8}
+SINGLE_WALL_SEEDS=${SINGLE_WALL_SEEDS:-6}
 STEPS=${STEPS:-}
 MULTI_STEPS=${MULTI_STEPS:-${STEPS:-40000}}
 SINGLE_STEPS=${SINGLE_STEPS:-${STEPS:-40000}}
 TEMPERATURE_STEPS=${TEMPERATURE_STEPS:-${STEPS:-40000}}
 WALL_STEPS=${WALL_STEPS:-${STEPS:-15000}}
 # Bad settings stop here, before any sweep starts (a sweep advances in chunks of 100 steps).
-for knob in SEEDS MULTI_SEEDS SINGLE_SEEDS STEPS MULTI_STEPS SINGLE_STEPS TEMPERATURE_STEPS WALL_STEPS; do
+for knob in SEEDS MULTI_SEEDS SINGLE_SEEDS SINGLE_WALL_SEEDS STEPS MULTI_STEPS SINGLE_STEPS TEMPERATURE_STEPS WALL_STEPS; do
     value=${!knob}
     [[ $knob == STEPS && -z $value ]] && continue  # STEPS unset: each sweep's own default
     if ! [[ $value =~ ^[1-9][0-9]*$ ]] || { [[ $knob != *SEEDS ]] && (( value % 100 )); }; then
@@ -91,14 +96,14 @@ seed_parts multi_agent "$MULTI_STEPS" "$MULTI_SEEDS" multi_parts
 seed_parts single_agent "$SINGLE_STEPS" "$SINGLE_SEEDS" single_parts
 sweep boltzmann_temperatures "$TEMPERATURE_STEPS"
 sweep boltzmann_low_temperatures "$TEMPERATURE_STEPS"
-sweep single_agent_walls_different "$WALL_STEPS"
+seed_parts single_agent_walls_different "$WALL_STEPS" "$SINGLE_WALL_SEEDS" wall_parts
 sweep multi_agent_walls_different "$WALL_STEPS"
 
 # Each needs its sweep's newest checkpoint (the one that keeps the replay buffers).
 "$PY" experiments/temperature_evidence.py runs/paper/boltzmann_temperatures
 "$PY" experiments/temperature_evidence.py runs/paper/boltzmann_low_temperatures
 # Figs. 7 (one agent) and 13 (one agent, every wall different), and the two-agent sweep's VAE.
-for part in "${single_parts[@]}" runs/paper/single_agent_walls_different "${multi_parts[@]}"; do
+for part in "${single_parts[@]}" "${wall_parts[@]}" "${multi_parts[@]}"; do
     "$PY" experiments/reconstruction_evidence.py "$part"  # each part keeps its own checkpoints
 done
 "$PY" experiments/results.py snapshot runs/paper

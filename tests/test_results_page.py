@@ -301,6 +301,7 @@ def test_bad_command_lines_are_messages_not_tracebacks(results, tmp_path, capsys
     ("SEEDS=0", "SEEDS=0: want a positive whole number"),
     ("MULTI_SEEDS=2.5", "MULTI_SEEDS=2.5: want a positive whole number"),
     ("SINGLE_SEEDS=-1", "SINGLE_SEEDS=-1: want a positive whole number"),
+    ("SINGLE_WALL_SEEDS=x", "SINGLE_WALL_SEEDS=x: want a positive whole number"),
 ])
 def test_reproduce_refuses_bad_settings_before_any_sweep(setting, message):
     import os
@@ -328,7 +329,7 @@ def test_reproduce_run_lengths_per_sweep_and_steps_for_all(settings, want):
 
     # PYTHON=echo prints each command instead of running it: nothing is swept or written.
     env = {k: v for k, v in os.environ.items()
-           if k not in ("SEEDS", "MULTI_SEEDS", "SINGLE_SEEDS", "STEPS", "MULTI_STEPS", "SINGLE_STEPS", "TEMPERATURE_STEPS",
+           if k not in ("SEEDS", "MULTI_SEEDS", "SINGLE_SEEDS", "SINGLE_WALL_SEEDS", "STEPS", "MULTI_STEPS", "SINGLE_STEPS", "TEMPERATURE_STEPS",
                         "WALL_STEPS")}
     env.update(settings, PYTHON="echo")
     done = subprocess.run(["bash", str(ROOT / "experiments" / "reproduce.sh")], env=env, capture_output=True,
@@ -336,18 +337,22 @@ def test_reproduce_run_lengths_per_sweep_and_steps_for_all(settings, want):
     assert done.returncode == 0, done.stderr
     got = {m[1]: int(m[2]) for m in re.finditer(r"preset=(\S+) seeds=3 first_seed=0 steps=(\d+)", done.stdout)}
     assert got == want
-    # Both experiments' seeds 3-7 as they ran for the page: sweeps of their own beside the first.
+    # Both experiments' seeds 3-7, and the one-agent wall experiment's 3-5, as they ran for the page:
+    # sweeps of their own beside the first.
     parts = re.findall(r"preset=(\w+) seeds=(\d) first_seed=([1-9]) steps=(\d+) .* out=(\S+)", done.stdout)
     assert parts == [("multi_agent", "3", "3", str(want["multi_agent"]), "runs/paper/multi_agent.seeds-3-5"),
                      ("multi_agent", "2", "6", str(want["multi_agent"]), "runs/paper/multi_agent.seeds-6-7"),
                      ("single_agent", "3", "3", str(want["single_agent"]), "runs/paper/single_agent.seeds-3-5"),
-                     ("single_agent", "2", "6", str(want["single_agent"]), "runs/paper/single_agent.seeds-6-7")]
+                     ("single_agent", "2", "6", str(want["single_agent"]), "runs/paper/single_agent.seeds-6-7"),
+                     ("single_agent_walls_different", "3", "3", str(want["single_agent_walls_different"]),
+                      "runs/paper/single_agent_walls_different.seeds-3-5")]
     # Then the evidence from their checkpoints, then the page.
     evidence = re.findall(r"experiments/(\w+)_evidence\.py runs/paper/(\S+)", done.stdout)
     assert evidence == [("temperature", "boltzmann_temperatures"), ("temperature", "boltzmann_low_temperatures"),
                         ("reconstruction", "single_agent"), ("reconstruction", "single_agent.seeds-3-5"),
                         ("reconstruction", "single_agent.seeds-6-7"),
                         ("reconstruction", "single_agent_walls_different"),
+                        ("reconstruction", "single_agent_walls_different.seeds-3-5"),
                         ("reconstruction", "multi_agent"), ("reconstruction", "multi_agent.seeds-3-5"),
                         ("reconstruction", "multi_agent.seeds-6-7")]
     assert done.stdout.rstrip().endswith("experiments/results.py check")
@@ -358,7 +363,8 @@ def test_reproduce_at_the_papers_seeds_runs_each_experiment_as_one_sweep():
     import re
     import subprocess
 
-    env = {k: v for k, v in os.environ.items() if k not in ("MULTI_SEEDS", "SINGLE_SEEDS", "STEPS", "MULTI_STEPS")}
+    env = {k: v for k, v in os.environ.items()
+           if k not in ("MULTI_SEEDS", "SINGLE_SEEDS", "SINGLE_WALL_SEEDS", "STEPS", "MULTI_STEPS")}
     env.update(SEEDS="8", PYTHON="echo")
     done = subprocess.run(["bash", str(ROOT / "experiments" / "reproduce.sh")], env=env, capture_output=True,
                           text=True, timeout=60)
