@@ -2,7 +2,7 @@
 # Remake every sweep and figure of docs/results.md from nothing.
 #
 #     bash experiments/reproduce.sh      # the scale of docs/results.md: 3 seeds (8 for the
-#                                        # two-agent and the one-agent experiment, 6 for
+#                                        # two-agent and the one-agent experiment and for
 #                                        # one agent with different walls); 40,000
 #                                        # steps a run with one or two agents and for the
 #                                        # temperatures, 15,000 for the wall variants
@@ -20,10 +20,10 @@
 # Seeds: SEEDS (default 3) per policy or setting of every preset; the two-agent experiment
 # (multi_agent) has MULTI_SEEDS (default 8) in all and the one-agent experiment (single_agent)
 # SINGLE_SEEDS (default 8), and one agent with a different texture on every wall
-# (single_agent_walls_different) SINGLE_WALL_SEEDS (default 6): the first SEEDS in
+# (single_agent_walls_different) SINGLE_WALL_SEEDS (default 8): the first SEEDS in
 # runs/paper/<preset> and the rest, as they ran for the page, in sweeps of their own of at most 3
-# seeds each (runs/paper/<preset>.seeds-3-5, and runs/paper/<preset>.seeds-6-7 of the first two: each
-# fits a 3-hour session on 2 cores), which the page reads with the first as one experiment
+# seeds each (runs/paper/<preset>.seeds-3-5 and runs/paper/<preset>.seeds-6-7: each fits a 3-hour
+# session on 2 cores), which the page reads with the first as one experiment
 # (analysis.merge_sweeps).
 #
 # Wall time on a 2-core AMD EPYC (lscpu "AMD EPYC", family 25 model 1), CPU only, one sweep at a
@@ -39,6 +39,7 @@
 #   boltzmann_low_temperatures  12 runs x 40,000 steps   7 h 37 min (14,000 steps in 2 h 28 min, 14,000-28,000 in 2 h 51 min, 28,000-40,000 in 2 h 18 min at 17.4 run-steps/s; 15-19 throughout)
 #   single_agent_walls_different  3 runs x 15,000 steps   30 min (25.9 run-steps/s)
 #   single_agent_walls_different.seeds-3-5  3 runs x 15,000 steps   14 min (56-59 run-steps/s), on the Intel Xeon above
+#   single_agent_walls_different.seeds-6-7  2 runs x 15,000 steps   8 min (65-68 run-steps/s), on the same Intel Xeon
 #   multi_agent_walls_different   9 runs x 15,000 steps   59 min (38.3 run-steps/s), on another 2-core AMD
 #                                 EPYC (family 26 model 2, with AVX-512 and bf16): not comparable with the rows above
 #   the page (snapshot, figures, claims)     about 5 s
@@ -55,7 +56,7 @@ PY=${PYTHON:-.venv/bin/python}
 SEEDS=${SEEDS:-3}
 MULTI_SEEDS=${MULTI_SEEDS:-8}
 SINGLE_SEEDS=${SINGLE_SEEDS:-8}
-SINGLE_WALL_SEEDS=${SINGLE_WALL_SEEDS:-6}
+SINGLE_WALL_SEEDS=${SINGLE_WALL_SEEDS:-8}
 STEPS=${STEPS:-}
 MULTI_STEPS=${MULTI_STEPS:-${STEPS:-40000}}
 SINGLE_STEPS=${SINGLE_STEPS:-${STEPS:-40000}}

@@ -337,7 +337,7 @@ def test_reproduce_run_lengths_per_sweep_and_steps_for_all(settings, want):
     assert done.returncode == 0, done.stderr
     got = {m[1]: int(m[2]) for m in re.finditer(r"preset=(\S+) seeds=3 first_seed=0 steps=(\d+)", done.stdout)}
     assert got == want
-    # Both experiments' seeds 3-7, and the one-agent wall experiment's 3-5, as they ran for the page:
+    # The one-agent, two-agent and one-agent wall experiments' seeds 3-7 as they ran for the page:
     # sweeps of their own beside the first.
     parts = re.findall(r"preset=(\w+) seeds=(\d) first_seed=([1-9]) steps=(\d+) .* out=(\S+)", done.stdout)
     assert parts == [("multi_agent", "3", "3", str(want["multi_agent"]), "runs/paper/multi_agent.seeds-3-5"),
@@ -345,7 +345,9 @@ def test_reproduce_run_lengths_per_sweep_and_steps_for_all(settings, want):
                      ("single_agent", "3", "3", str(want["single_agent"]), "runs/paper/single_agent.seeds-3-5"),
                      ("single_agent", "2", "6", str(want["single_agent"]), "runs/paper/single_agent.seeds-6-7"),
                      ("single_agent_walls_different", "3", "3", str(want["single_agent_walls_different"]),
-                      "runs/paper/single_agent_walls_different.seeds-3-5")]
+                      "runs/paper/single_agent_walls_different.seeds-3-5"),
+                     ("single_agent_walls_different", "2", "6", str(want["single_agent_walls_different"]),
+                      "runs/paper/single_agent_walls_different.seeds-6-7")]
     # Then the evidence from their checkpoints, then the page.
     evidence = re.findall(r"experiments/(\w+)_evidence\.py runs/paper/(\S+)", done.stdout)
     assert evidence == [("temperature", "boltzmann_temperatures"), ("temperature", "boltzmann_low_temperatures"),
@@ -353,6 +355,7 @@ def test_reproduce_run_lengths_per_sweep_and_steps_for_all(settings, want):
                         ("reconstruction", "single_agent.seeds-6-7"),
                         ("reconstruction", "single_agent_walls_different"),
                         ("reconstruction", "single_agent_walls_different.seeds-3-5"),
+                        ("reconstruction", "single_agent_walls_different.seeds-6-7"),
                         ("reconstruction", "multi_agent"), ("reconstruction", "multi_agent.seeds-3-5"),
                         ("reconstruction", "multi_agent.seeds-6-7")]
     assert done.stdout.rstrip().endswith("experiments/results.py check")
