@@ -26,7 +26,9 @@ run acts once; agent-steps/s counts each agent), compile time and peak memory. T
 aggregate agent-steps/s for 24 runs (ten times the authors' own code, about 3.5 agent steps per
 second for one multi-agent run; docs/paper_setup.md) with peak memory under 16 GiB. Both
 figures are printed, and the verdict for each reading: 35 agent-steps/s, and the stricter 35
-run-steps/s (70 agent-steps/s with two agents).
+run-steps/s (70 agent-steps/s with two agents). With `checkpoint=sync|async|both` it then times
+writing a checkpoint of those runs (every replay filled first), waited for and in the background:
+how long the write holds the steps and how much it adds to the chunk beside it.
 
 what=profile: one run-step of one run at the sweep's defaults split by component (physics,
 rendering, encoding, memory, self-models, replay sampling, VAE update, MDN-RNN BPTT, self-model
@@ -44,6 +46,7 @@ from __future__ import annotations
 import dataclasses
 import json
 import os
+import pathlib
 import resource
 import sys
 import time
@@ -58,7 +61,7 @@ from mjx_curio import arena as arena_lib
 from mjx_curio import host_devices
 from mjx_curio import profile as profile_lib
 from mjx_curio import world_model as wm
-from mjx_curio.cli import Key, as_choice, as_int, main_guard
+from mjx_curio.cli import Key, as_choice, as_int, as_str, main_guard
 from mjx_curio.config import LATENT_MODES, AutoOr, ConfigError, Int, LearnerConfig
 
 PROG = "mjx_curio.bench"
@@ -307,6 +310,7 @@ def bench_sweep(args: dict) -> dict:
         jax.block_until_ready(states)
         best = min(best, time.perf_counter() - t0)
     run_steps = len(runs) * args["steps"] / best
+    written = {} if args["checkpoint"] == "none" else {"checkpoint": _time_checkpoints(program, states, best, args)}
     return {
         "what": "sweep",
         "fidelity": args["fidelity"],
@@ -325,9 +329,68 @@ def bench_sweep(args: dict) -> dict:
         "run_steps_per_s": round(run_steps, 1),  # one step of one run: every agent acts once
         "agent_steps_per_s": round(run_steps * args["agents"], 1),
         "ms_per_run_step": round(1e3 / run_steps * 1, 2),
+        **written,
         "peak_rss_mib": _peak_rss_mib(),
         **_platform(),
     }
+
+
+def _time_checkpoints(program, states, chunk_s: float, args: dict) -> dict:
+    """What writing a checkpoint of `states` (every run's state and replay, as the sweep saves
+    them) adds to the steps: per mode, one after the other, the checkpoint is started, the next
+    chunk runs, and the write is waited for. `held_s`: until `save` returned (the whole write
+    when synchronous); `added_s`: the save and that chunk, less a chunk alone (`chunk_s`);
+    `write_s`: until the checkpoint was complete on disk. Each mode writes into a fresh
+    temporary directory under `checkpoint_dir`, removed afterwards. The bytes depend on how
+    full the replay is: zeros compress to almost nothing, so a buffer the timed chunks filled
+    (buffer <= steps x (repeats + 1)) is what a long run writes; a buffer they did not fill is
+    filled first by repeating the steps they wrote (`_fill_replay`)."""
+    import shutil
+    import tempfile
+
+    from mjx_curio import checkpoint as ckpt_lib
+
+    modes = ("sync", "async") if args["checkpoint"] == "both" else (args["checkpoint"],)
+    states = _fill_replay(states)
+    raw = sum(x.nbytes for x in jax.tree.leaves(states))
+    result = {"raw_mb": round(raw / 1e6, 1)}
+    for mode in modes:
+        directory = tempfile.mkdtemp(prefix="mjx_curio_bench_checkpoint_", dir=args["checkpoint_dir"] or None)
+        try:
+            ckpts = ckpt_lib.Checkpoints(pathlib.Path(directory), asynchronous=mode == "async")
+            t0 = time.perf_counter()
+            ckpts.save(1, states)
+            held = time.perf_counter() - t0
+            states, _ = program.chunk(states)
+            jax.block_until_ready(states)
+            with_chunk = time.perf_counter() - t0
+            ckpts.wait()
+            write = time.perf_counter() - t0
+            ckpts.close()
+            disk = sum(f.stat().st_size for f in pathlib.Path(directory).rglob("*") if f.is_file())
+        finally:
+            shutil.rmtree(directory, ignore_errors=True)
+        result[mode] = {"held_s": round(held, 2), "added_s": round(with_chunk - chunk_s, 2),
+                        "write_s": round(write, 2), "disk_mb": round(disk / 1e6, 1)}
+    return result
+
+
+def _fill_replay(states):
+    """Every run's replay full: slot i gets a copy of written slot i mod size. A checkpoint then
+    carries a full buffer's bytes, compressed about as real frames are (the copies lie a whole
+    filled stretch apart, farther than a fast compressor looks back)."""
+    from mjx_curio import run as run_lib
+
+    def fill(replay):
+        def one(r):
+            take = lambda x: jnp.take(x, jnp.arange(r.capacity) % jnp.maximum(r.size, 1), axis=0)  # noqa: E731
+            full = jax.tree.map(take, (r.frames, r.latents, r.actions, r.carry))
+            return r._replace(frames=full[0], latents=full[1], actions=full[2], carry=full[3],
+                              index=jnp.zeros_like(r.index), size=jnp.full_like(r.size, r.capacity))
+        return jax.vmap(one)(replay)
+
+    state, replay = run_lib.split_replay(states)
+    return run_lib.with_replay(state, jax.jit(fill)(replay))
 
 
 def bench_profile(args: dict) -> dict:
@@ -365,6 +428,11 @@ KEYS = [
     Key("fidelity", "paper", "sweep: paper (the defaults) | legacy (the settings before the paper-faithful defaults: "
         "square camera, mean latents, summed curiosity, unit pair friction, free bits) | both, one after the other",
         as_choice(("paper", "legacy", "both"))),
+    Key("checkpoint", "none", "sweep: after the timed chunks, time writing a checkpoint: none | sync (the sweep "
+        "waits for the write) | async (written in the background) | both, one after the other",
+        as_choice(("none", "sync", "async", "both"))),
+    Key("checkpoint_dir", "", "sweep with checkpoint: where the temporary checkpoint directories go (default: the "
+        "system's temporary directory)", as_str),
     Key("seed", 0, "random seed", as_int(0)),
 ]
 
@@ -380,6 +448,9 @@ def _validate(args: dict) -> None:
             raise ConfigError(f"steps={args['steps']} must be a multiple of update_every={args['update_every']}")
         if args["buffer"] < args["seq_len"] + 2:
             raise ConfigError(f"buffer={args['buffer']} must be at least seq_len + 2 = {args['seq_len'] + 2}")
+        where = args["checkpoint_dir"]
+        if where and not (os.path.isdir(where) and os.access(where, os.W_OK | os.X_OK)):
+            raise ConfigError(f"checkpoint_dir={where} must be a directory you can write")
     elif args["what"] == "learner":
         LearnerConfig(image=args["image"], n_agents=args["agents"], batch=args["batch"], seq_len=args["seq_len"], latents=args["latents"])
         LearnerConfig(image=args["image"], n_agents=1, batch=args["vae_batch"])

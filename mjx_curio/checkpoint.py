@@ -13,6 +13,12 @@ Orbax writes each item into a temporary directory and renames it when complete, 
 killed mid-write leaves no half checkpoint that looks whole. A checkpoint is complete when its
 state, and (unless save_replay=false) its replay, both exist; `latest_complete` returns the
 newest such step, so a kill between the two writes falls back to the previous checkpoint.
+
+Asynchronous (the sweep's async_checkpoints, by default on a GPU or TPU): `save` returns once orbax holds the
+arrays on the host (a copy from an accelerator; on a CPU, views that keep the buffers alive, so
+the next chunk cannot donate them and allocates its own), and the compression and writing go on
+in background threads while the sweep steps on. `writing()` says whether they still run, `wait()`
+ends them; the next `save` waits for the previous one first. The files are the same either way.
 """
 
 from __future__ import annotations
@@ -45,9 +51,11 @@ class Checkpoints:
         keep_every: int | None = None,
         keep_steps: tuple = (),
         read_only: bool = False,
+        asynchronous: bool = False,
     ):
         self.directory = pathlib.Path(directory)
         self.save_replay = save_replay
+        self.asynchronous = asynchronous
         policies = [pp.LatestN(keep_last)]
         if keep_every:
             policies.append(pp.EveryNSteps(keep_every))
@@ -62,7 +70,12 @@ class Checkpoints:
     def _manager(self, name: str, policy, read_only: bool) -> ocp.CheckpointManager:
         options = ocp.CheckpointManagerOptions(
             preservation_policy=policy,
-            enable_async_checkpointing=False,  # the sweep waits anyway; simpler failure modes
+            enable_async_checkpointing=self.asynchronous,
+            # Written in the background, the state's and the replay's writes run at once, and each
+            # manager's threads meet the other processes' at barriers named alike: without a prefix
+            # of its own, one manager's barrier can pair with the other's, and a process finalises
+            # a checkpoint before the others have written their parts.
+            multiprocessing_options=ocp.options.MultiprocessingOptions(barrier_sync_key_prefix=name),
             create=not read_only,
             read_only=read_only,
         )
@@ -71,13 +84,29 @@ class Checkpoints:
     # ------------------------------------------------------------------------------ save
 
     def save(self, step: int, states: run_lib.RunState) -> None:
+        """Checkpoint `step`: written when this returns, or, asynchronous, under way (`wait`)."""
+        self.wait()  # the previous checkpoint complete first, whatever orbax would do
         state, replay = run_lib.split_replay(states)
         self.state.save(step, args=ocp.args.StandardSave(to_nested(state)))
-        self.state.wait_until_finished()
-        _maybe_crash("after-state", step)
+        if _crash_requested("after-state", step):
+            self.state.wait_until_finished()
+            os.kill(os.getpid(), signal.SIGKILL)
         if self.save_replay:
             self.replay.save(step, args=ocp.args.StandardSave(to_nested(replay)))
-            self.replay.wait_until_finished()
+        if not self.asynchronous:
+            self.wait()
+
+    def writing(self) -> bool:
+        """Whether a checkpoint is still being written in the background."""
+        return any(m.is_saving_in_progress() for m in self._managers())
+
+    def wait(self) -> None:
+        """Block until every checkpoint started is complete on disk."""
+        for m in self._managers():
+            m.wait_until_finished()
+
+    def _managers(self) -> list[ocp.CheckpointManager]:
+        return [m for m in (self.state, self.replay) if m is not None]
 
     # ------------------------------------------------------------------------------ find
 
@@ -149,6 +178,8 @@ class Checkpoints:
         return {k: v for k, v in out.items() if wanted[k]}
 
     def close(self) -> None:
+        """Wait for any write under way, then release orbax's threads."""
+        self.wait()
         self.state.close()
         if self.replay is not None:
             self.replay.close()
@@ -200,10 +231,9 @@ def _key_name(k) -> str:
     return str(k)
 
 
-def _maybe_crash(point: str, step: int) -> None:
+def _crash_requested(point: str, step: int) -> bool:
     spec = os.environ.get(CRASH_ENV, "")
-    if spec and spec == f"{point}:{step}":
-        os.kill(os.getpid(), signal.SIGKILL)
+    return bool(spec) and spec == f"{point}:{step}"
 
 
 def remove_tmp_dirs(directory: pathlib.Path) -> list[pathlib.Path]:

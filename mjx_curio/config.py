@@ -449,6 +449,14 @@ class SweepConfig:
                              ListOf(Int(1)), resume_free=True, group=_OUT)
     save_replay: bool = knob(True, "save replay buffers with checkpoints (needed for an exact resume)", Bool(),
                              resume_free=True, group=_OUT)
+    # Writing a paper-size checkpoint (24 runs: about 7 GB before compression, most of it replay)
+    # held a sweep on one H200 about 10 s each time, 17 times in the main job: in the background
+    # the compression and writing run on the host's cores while the accelerator steps on. On a
+    # CPU the same cores do both, so the steps gain nothing (measured: docs/cost_model.md), and
+    # the state being written cannot be donated to the next chunk, which holds a second copy.
+    async_checkpoints: str = knob("auto", "write checkpoints in the background while the sweep steps on: true, "
+                                  "false (the sweep waits for each write), auto (true on a GPU or TPU, false on a CPU)",
+                                  Choice(("auto", "true", "false")), resume_free=True, group=_OUT)
 
     chunk: int = knob(100, "agent steps per compiled chunk between host syncs", Int(1), resume_free=True, group=_RUN)
     runs_loop: str = knob("auto", "how runs share the program: map (one by one), vmap (batched), auto (map on CPU)",

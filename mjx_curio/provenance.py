@@ -15,8 +15,9 @@ import mjx_curio
 FORMAT = "mjx_curio.sweep/1"
 
 
-def manifest(p, run_cfg, devices, n_pad: int, n_windows: int) -> dict:
-    """p: the sweep's `plan.Plan`; run_cfg: its RunConfig with runs_loop resolved."""
+def manifest(p, run_cfg, devices, n_pad: int, n_windows: int, background: bool = False) -> dict:
+    """p: the sweep's `plan.Plan`; run_cfg: its RunConfig with runs_loop resolved; background:
+    async_checkpoints resolved (checkpoints written while the sweep steps on)."""
     from mjx_curio import distributed
     from mjx_curio import metrics as metrics_lib
     from mjx_curio.arena import ACTIONS, OBJECTS
@@ -38,7 +39,8 @@ def manifest(p, run_cfg, devices, n_pad: int, n_windows: int) -> dict:
         "metrics": {"every": run_cfg.metrics_every, "windows": n_windows, "steps_file": "metrics/steps.npy",
                     "schema": metrics_lib.schema_doc()},
         "steps_planned": [{"steps": p.values["steps"], "from_step": 0}],
-        "checkpoints": {"state": "checkpoints/state/<step>", "replay": "checkpoints/replay/<step>"},
+        "checkpoints": {"state": "checkpoints/state/<step>", "replay": "checkpoints/replay/<step>",
+                        "written_in_background": background},
         "versions": versions(),
         "device": {"platform": devices[0].platform, "kind": devices[0].device_kind, "count": len(devices),
                    "processes": distributed.process_count(), "host": platform.node(), "cpu": cpu_name(),

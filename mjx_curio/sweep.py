@@ -144,6 +144,7 @@ def _execute(p: Plan, stop: _StopSignals) -> int:
     lead = jax.process_index() == 0
     runs_loop = p.sweep.runs_loop if p.sweep.runs_loop != "auto" else ("map" if devices[0].platform == "cpu" else "vmap")
     cfg = dataclasses.replace(p.run, runs_loop=runs_loop)
+    background = v["async_checkpoints"] == "true" or (v["async_checkpoints"] == "auto" and devices[0].platform != "cpu")
     n_runs = len(p.runs)
     n_pad = host_devices.padding(n_runs, len(devices))  # copies of run 0: every device holds as many runs
     steps, every = v["steps"], v["metrics_every"]
@@ -151,7 +152,8 @@ def _execute(p: Plan, stop: _StopSignals) -> int:
     ckpts_dir = p.out / "checkpoints"
     if not p.resume:
         if lead:
-            metrics_lib.write_json_atomic(p.out / "manifest.json", provenance.manifest(p, cfg, devices, n_pad, n_windows))
+            made = provenance.manifest(p, cfg, devices, n_pad, n_windows, background)
+            metrics_lib.write_json_atomic(p.out / "manifest.json", made)
             store = metrics_lib.MetricsStore(p.out / "metrics", n_runs, n_windows, v["agents"], create=True)
             metrics_lib.write_steps(p.out / "metrics", n_windows, every)
     else:
@@ -171,7 +173,8 @@ def _execute(p: Plan, stop: _StopSignals) -> int:
                 metrics_lib.write_json_atomic(p.out / "manifest.json", saved)
     program = SweepProgram(cfg, p.runs, n_pad, v["chunk"])
     ckpts = ckpt_lib.Checkpoints(ckpts_dir, save_replay=v["save_replay"], keep_last=v["keep_last"],
-                                 keep_every=v["keep_every"] or None, keep_steps=tuple(v["keep_steps"]))
+                                 keep_every=v["keep_every"] or None, keep_steps=tuple(v["keep_steps"]),
+                                 asynchronous=background)
 
     start, states = 0, None
     if p.resume:
@@ -202,14 +205,29 @@ def _execute(p: Plan, stop: _StopSignals) -> int:
     old = read_progress(p.out) if p.resume else {}
     halted_info = dict(old.get("halted", {}))
     step = last_saved = start
+    # progress.json names the newest *complete* checkpoint: one still being written in the
+    # background (async_checkpoints) is recorded once it is on disk.
+    written = None  # (step, halted runs then) of the checkpoint under way, until recorded
 
-    def save(step):
-        ckpts.save(step, states)
+    def record(block: bool):
+        nonlocal written
+        if written is None or (not block and ckpts.writing()):
+            return
+        ckpts.wait()
+        done, halted_then = written
+        written = None
         if lead:
             metrics_lib.write_json_atomic(p.out / "progress.json", {
-                "steps_done": step, "steps": steps, "windows_done": step // every,
-                "checkpoint": step, "halted": halted_info,
+                "steps_done": done, "steps": steps, "windows_done": done // every,
+                "checkpoint": done, "halted": halted_then,
                 "updated": datetime.datetime.now().isoformat(timespec="seconds")})
+
+    def save(step):
+        nonlocal written
+        record(block=True)
+        ckpts.save(step, states)
+        written = (step, dict(halted_info))
+        record(block=not background)
 
     checkpoint_steps = set(v["keep_steps"])
     while step < steps and not distributed.any_process(stop.signum is not None):
@@ -234,6 +252,8 @@ def _execute(p: Plan, stop: _StopSignals) -> int:
         if step % v["checkpoint_every"] == 0 or step == steps or step in checkpoint_steps:
             save(step)
             last_saved = step
+        else:
+            record(block=False)
         progress.update(step)
     if step < steps:  # stopped by a signal
         signum = stop.signum if stop.signum is not None else signal.SIGTERM
@@ -242,11 +262,13 @@ def _execute(p: Plan, stop: _StopSignals) -> int:
                              + (", writing a checkpoint (Ctrl-C again to stop at once)" if step != last_saved else ""))
         if step != last_saved:
             save(step)
+        record(block=True)
         ckpts.close()
         progress.done()
         if lead:
             _stopped_message(p, signal.Signals(signum).name)
         return 128 + int(signum)
+    record(block=True)
     ckpts.close()
     progress.done()
     if lead:

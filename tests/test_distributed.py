@@ -6,8 +6,8 @@ the runs axis spans both processes' devices. Each process's device runs the same
 device of the two-device sweep in one process, so the two agree bit for bit; against the
 one-device tiny sweep, what sharding guarantees is compared (tests/test_sweep.py).
 
-Opt-in (MJX_CURIO_MULTIPROCESS=1): two more compiles, ~90 s on two cores, which the default
-suite leaves out to stay well under its time budget. Measured 2026-11-22: passes, and the two-
+Opt-in (MJX_CURIO_MULTIPROCESS=1): two more compiles, ~90 s on two cores a case, which the
+default suite leaves out to stay well under its time budget. Measured 2026-11-22: passes, and the two-
 process sweep is bit-identical to the two-device one.
 """
 
@@ -32,10 +32,14 @@ def _free_port() -> int:
         return s.getsockname()[1]
 
 
-def test_two_processes_equal_two_devices_in_one(tiny_sweep, sharded_sweep, tmp_path):
+# Checkpoints written while the sweep waits (what `auto` does on a CPU), and in the background (what
+# it does on a GPU or TPU), where orbax's threads of the two processes meet at barriers of their own.
+@pytest.mark.parametrize("background", ["false", "true"], ids=["waited-for", "background"])
+def test_two_processes_equal_two_devices_in_one(background, tiny_sweep, sharded_sweep, tmp_path):
     out = tmp_path / "two_processes"
     port = _free_port()
-    procs = [subprocess.Popen([sys.executable, "-m", "mjx_curio.sweep", *TINY_SWEEP, f"out={out}", f"compile_cache={CACHE}"],
+    args = [*TINY_SWEEP, f"out={out}", f"compile_cache={CACHE}", f"async_checkpoints={background}"]
+    procs = [subprocess.Popen([sys.executable, "-m", "mjx_curio.sweep", *args],
                               stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True,
                               env=dict(os.environ, JAX_COORDINATOR_ADDRESS=f"127.0.0.1:{port}", JAX_NUM_PROCESSES="2",
                                        JAX_PROCESS_ID=str(i)))

@@ -71,6 +71,17 @@ def test_bad_parts_is_refused_naming_the_key(capsys):
     assert "parts" in err and "warp" in err and "encoding" in err
 
 
+@pytest.mark.parametrize("args, knob, allowed", [
+    (["checkpoint=later"], "checkpoint", "none, sync, async, both"),
+    (["checkpoint=both", "checkpoint_dir=/nonexistent/place"], "checkpoint_dir", "a directory you can write"),
+])
+def test_bad_checkpoint_timing_input_is_refused_before_any_work(args, knob, allowed, capsys):
+    with pytest.raises(SystemExit) as exit_:
+        bench.main(["what=sweep", *args])
+    err = capsys.readouterr().err
+    assert exit_.value.code == 2 and knob in err and all(a in err for a in allowed.split(", ")), err
+
+
 LEARNER_PARTS = "replay_sample,vae_update,mdn_rnn_bptt,self_model_update,reencode,reencode_layers"
 
 

@@ -162,6 +162,24 @@ def test_killed_while_writing_a_checkpoint_resumes_from_the_previous_one(tiny_sw
     _assert_same_tree(_state(out, 200), _state(tiny_sweep, 200), "final checkpoint")
 
 
+def test_checkpoints_written_in_the_background_equal_those_the_sweep_waited_for(tiny_sweep, tmp_path):
+    # On a CPU the sweep waits for each write (async_checkpoints=auto); asked to write in the
+    # background it steps on meanwhile, its next chunk unable to donate the state being written
+    # (tests/test_checkpoint.py). The same program: the same numbers, bit for bit.
+    out = tmp_path / "background"
+    sweep_in_process(*TINY_SWEEP, f"out={out}", "async_checkpoints=true")
+    for sweep, background in ((tiny_sweep, False), (out, True)):
+        assert json.loads((sweep / "manifest.json").read_text())["checkpoints"]["written_in_background"] is background
+    assert json.loads((out / "progress.json").read_text())["checkpoint"] == 200
+    _assert_same_metrics(_metrics(out), _metrics(tiny_sweep), "checkpoints in the background vs waited for")
+    for step in (100, 200):
+        _assert_same_tree(_state(out, step), _state(tiny_sweep, step), f"checkpoint {step}")
+    ck, ref = (ckpt_lib.Checkpoints(d / "checkpoints", read_only=True) for d in (out, tiny_sweep))
+    _assert_same_tree(ck.restore_raw(200, "replay"), ref.restore_raw(200, "replay"), "replay at step 200")
+    ck.close()
+    ref.close()
+
+
 @pytest.mark.parametrize("interrupted_sweep", ["sigint_sweep", "sigterm_sweep"], ids=["ctrl-c", "sigterm"], indirect=True)
 def test_an_interrupted_sweep_checkpoints_says_how_to_resume_and_resumes_exactly(interrupted_sweep, tiny_sweep, tmp_path):
     # The tiny sweep planned for 300 steps in a subprocess, sent the signal once its first chunk is
