@@ -185,7 +185,7 @@ BACKGROUND_SWEEPS = {  # made in the order the session's tests first read them
     "minimal_sweep_resumed": MINIMAL_SWEEP_RESUMED,
     "crashed_sweep": TINY_SWEEP,  # killed inside its step-200 checkpoint write (STOPPED_BY)
     "sigint_sweep": INTERRUPTED_SWEEP,
-    "sigterm_sweep": INTERRUPTED_SWEEP,
+    "sigterm_sweep": (*INTERRUPTED_SWEEP, "async_checkpoints=true"),  # its stop's checkpoint written in the background
     "sharded_sweep": (*TINY_SWEEP, "host_devices=2"),  # the tiny sweep on two forced host devices
     # The tiny sweep and one of its runs alone, compiled as users' runs are (USERS_CODEGEN_SWEEPS).
     "users_tiny_sweep": TINY_SWEEP,
