@@ -121,7 +121,7 @@ def _copy_final_windows(src: pathlib.Path, dst: pathlib.Path, windows_done: int,
 
 def _command(manifest: dict) -> str:
     """The sweep's command without the keys that may change between sessions of one sweep."""
-    return re.sub(r" (steps|resume|progress|compile_cache|host_devices|out)=\S+", "", manifest.get("command", ""))
+    return re.sub(r" (steps|resume|progress|compile_cache|host_devices|async_checkpoints|out)=\S+", "", manifest.get("command", ""))
 
 
 def load_presets(src: pathlib.Path = SNAPSHOTS) -> dict:
