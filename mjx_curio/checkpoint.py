@@ -14,11 +14,12 @@ killed mid-write leaves no half checkpoint that looks whole. A checkpoint is com
 state, and (unless save_replay=false) its replay, both exist; `latest_complete` returns the
 newest such step, so a kill between the two writes falls back to the previous checkpoint.
 
-Asynchronous (the sweep's async_checkpoints, by default on a GPU or TPU): `save` returns once orbax holds the
-arrays on the host (a copy from an accelerator; on a CPU, views that keep the buffers alive, so
-the next chunk cannot donate them and allocates its own), and the compression and writing go on
-in background threads while the sweep steps on. `writing()` says whether they still run, `wait()`
-ends them; the next `save` waits for the previous one first. The files are the same either way.
+Asynchronous (the sweep's async_checkpoints, by default on a GPU or TPU): `save` returns once
+orbax holds the arrays on the host (a copy from an accelerator; on a CPU, views that keep the
+buffers alive, so the next chunk cannot donate them and allocates its own), and the compression
+and writing go on in background threads while the sweep steps on. `writing()` says whether they
+still run, `wait()` ends them; the next `save` waits for the previous one first. The files are
+the same either way.
 """
 
 from __future__ import annotations

@@ -404,6 +404,7 @@ def test_diverged_physics_halts_that_run_only_and_masks_its_windows(tiny_sweep, 
         (["kl_tolerance=-1"], "kl_tolerance=-1.0", ">= 0.0"),
         (["vae_channels=32,64"], "dec_channels=128,64,32,16", "one width per encoder layer"),
         (["latents=fresh"], "latents='fresh'", "'stored', 'reencode'"),
+        (["async_checkpoints=yes"], "async_checkpoints='yes'", "'auto', 'true', 'false'"),
     ],
 )
 def test_bad_input_stops_before_any_work(args, knob, allowed, tmp_path):
