@@ -376,9 +376,10 @@ def _time_checkpoints(program, states, chunk_s: float, args: dict) -> dict:
 
 
 def _fill_replay(states):
-    """Every run's replay full: slot i gets a copy of written slot i mod size. A checkpoint then
-    carries a full buffer's bytes, compressed about as real frames are (the copies lie a whole
-    filled stretch apart, farther than a fast compressor looks back)."""
+    """Every run's replay full: slot i gets a copy of written slot i mod size (a full buffer is
+    left as it is). A checkpoint then carries a full buffer's bytes, compressed about as real
+    frames are (the copies lie a whole filled stretch apart, farther than a fast compressor looks
+    back)."""
     from mjx_curio import run as run_lib
 
     def fill(replay):
@@ -386,7 +387,8 @@ def _fill_replay(states):
             take = lambda x: jnp.take(x, jnp.arange(r.capacity) % jnp.maximum(r.size, 1), axis=0)  # noqa: E731
             full = jax.tree.map(take, (r.frames, r.latents, r.actions, r.carry))
             return r._replace(frames=full[0], latents=full[1], actions=full[2], carry=full[3],
-                              index=jnp.zeros_like(r.index), size=jnp.full_like(r.size, r.capacity))
+                              index=jnp.where(r.size == r.capacity, r.index, 0),
+                              size=jnp.full_like(r.size, r.capacity))
         return jax.vmap(one)(replay)
 
     state, replay = run_lib.split_replay(states)

@@ -82,6 +82,38 @@ def test_bad_checkpoint_timing_input_is_refused_before_any_work(args, knob, allo
     assert exit_.value.code == 2 and knob in err and all(a in err for a in allowed.split(", ")), err
 
 
+def test_the_checkpoint_timing_fills_each_replay_with_copies_of_its_written_steps():
+    """bench what=sweep checkpoint=...: an unfilled replay would checkpoint as zeros, which
+    compress to nothing; each run's buffer is filled by repeating what it wrote (NumPy's view of
+    the same rule), and a full one is left as it is."""
+    import jax.numpy as jnp
+    import numpy as np
+
+    from mjx_curio import replay as replay_lib
+    from mjx_curio import run as run_lib
+
+    rng = np.random.default_rng(0)
+    cap, sizes, heads = 10, np.array([3, 10]), np.array([3, 4])
+    one = replay_lib.init(n_agents=2, image=4, latent=3, rnn_hidden=5, capacity=cap)
+    replay = jax.tree.map(lambda x: np.stack([np.asarray(x)] * 2), one)
+    replay = replay._replace(frames=rng.integers(0, 256, replay.frames.shape, dtype=np.uint8),
+                             latents=rng.normal(size=replay.latents.shape).astype(np.float32),
+                             actions=rng.integers(0, 7, replay.actions.shape, dtype=np.int32),
+                             carry=tuple(rng.normal(size=c.shape).astype(np.float32) for c in replay.carry),
+                             index=heads.astype(np.int32), size=sizes.astype(np.int32))
+    states = run_lib.RunState(*([None] * len(run_lib.RunState._fields)))._replace(
+        replay=jax.tree.map(jnp.asarray, replay))
+    got = bench._fill_replay(states).replay
+    np.testing.assert_array_equal(got.size, [cap, cap])
+    np.testing.assert_array_equal(got.index, [0, 4])  # the full buffer keeps its write head
+    for r, size in enumerate(sizes):
+        take = np.arange(cap) % size
+        for name in ("frames", "latents", "actions"):
+            np.testing.assert_array_equal(np.asarray(getattr(got, name))[r], getattr(replay, name)[r][take])
+        for c_got, c_want in zip(got.carry, replay.carry):
+            np.testing.assert_array_equal(np.asarray(c_got)[r], c_want[r][take])
+
+
 LEARNER_PARTS = "replay_sample,vae_update,mdn_rnn_bptt,self_model_update,reencode,reencode_layers"
 
 
