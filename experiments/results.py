@@ -15,12 +15,13 @@ alone. It never replaces a snapshot with a different sweep or with one that has 
 docs/results.md (between `<!-- generated: NAME -->` and `<!-- end: NAME -->`): the scale of the
 sweeps, the figures with their captions, the claims table (`analysis.claims_table`), the
 seeds each claim's tests need (`analysis.power_table`), the Boltzmann temperatures measure by
-measure (`analysis.temperature_table`) and the reconstructions' quality over training (from
+measure (`analysis.temperature_table`), different walls against identical ones
+(`analysis.walls_table`) and the reconstructions' quality over training (from
 docs/results/reconstructions.json, which `reconstruction_evidence.py` writes); the rest
 of the page (what the verdicts mean, why a claim may fail here) is prose and stays as written.
 The claims' numbers also go to docs/results/claims.csv.
 
-`check` recomputes the scale, claims, power, temperatures and reconstructions blocks from the
+`check` recomputes the scale, claims, power, temperatures, walls and reconstructions blocks from the
 committed results and exits 1 if they differ from the page (the test suite does the same).
 """
 
@@ -179,6 +180,16 @@ def temperatures_block(presets: dict) -> str:
         parts.append("The same measures for the three policies of the two-agent sweep (`multi_agent`), to set the "
                      f"temperatures beside them:\n\n{an.policy_measures_table(presets['multi_agent']).to_markdown()}")
     return "\n".join(parts)
+
+
+def walls_block(presets: dict) -> str:
+    """Different walls against identical ones, per policy (`analysis.walls_table`)."""
+    from mjx_curio import analysis as an
+
+    table = an.walls_table(presets)
+    if not table.rows:
+        return "No walls-different sweep and its identical-walls sweep have both been snapshotted yet.\n"
+    return table.to_markdown()
 
 
 def reconstructions_table(entry: dict) -> str:
@@ -505,7 +516,8 @@ def computed_blocks(presets: dict) -> dict[str, str]:
     """The blocks that are pure functions of the committed results: the snapshots' metrics, and
     reconstructions.json for the reconstructions block (what `check` compares)."""
     return {"scale": scale_block(presets), "claims": claims_block(presets), "power": power_block(presets),
-            "temperatures": temperatures_block(presets), "reconstructions": reconstructions_block()}
+            "temperatures": temperatures_block(presets), "walls": walls_block(presets),
+            "reconstructions": reconstructions_block()}
 
 
 def write_page(src: pathlib.Path = SNAPSHOTS) -> None:

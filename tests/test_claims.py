@@ -560,3 +560,48 @@ def test_claims_table_on_the_tiny_sweeps(tiny_sweeps_dir):
     assert by_key["3"]["curiosity single"] is not None and by_key["3"]["curiosity multi"] is not None
     assert by_key["4"]["within z"] is not None and by_key["7"]["F"] is not None
     print(md)
+
+
+def test_walls_table_on_planted_runs():
+    # One agent, ε-greedy, 3 seeds a side. The walls runs ran 15 windows of 20 steps (300 steps),
+    # the identical-walls runs 25: only their first 15 windows count, the last 100 steps (5 windows)
+    # for curiosity and the VAE loss. The windows outside are planted far off, so using them shows.
+    d = fake_sweep("walls", 1, [("eps", 0.2)], 15, walls="different")
+    s = fake_sweep("same", 1, [("eps", 0.2), ("ucb", 1.0)], 25)
+    for sweep, level in ((d, [1.0, 2.0, 4.0]), (s, [0.5, 1.0, 1.5, 9.0, 9.0, 9.0])):
+        sweep.metrics["curiosity"][:] = 100.0
+        sweep.metrics["curiosity"][:, 10:15, 0] = np.array(level)[:, None]
+        sweep.metrics["vae_loss"][:] = 1e4
+        sweep.metrics["vae_loss"][:, 10:15] = 10 * np.array(level)[:, None]
+    s.metrics["curiosity"][:, 15:] = s.metrics["vae_loss"][:, 15:] = -1e6
+    # Contacts over all 300 steps: walls run i touches on i + 1 steps; identical-walls runs on 3,
+    # and on every step after step 300.
+    for i in range(3):
+        d.metrics["contact_object"][i, 0, 0, 0] = i + 1
+    s.metrics["contact_object"][:, 1, 0, 1] = 3
+    s.metrics["contact_object"][:, 15:, 0, 0] = 20
+    # The third walls run diverged: no late windows (its contacts still count over its steps).
+    d.metrics["curiosity"][2, 5:] = d.metrics["vae_loss"][2, 5:] = np.nan
+    d.metrics["steps_taken"][2, 5:] = 0
+    t = an.walls_table({"single_agent_walls_different": d, "single_agent": s}, late_steps=100)
+    assert t.columns[3:] == ["curiosity, steps 200-300", "VAE loss per image, steps 200-300",
+                             "object contacts per 1,000 agent-steps, steps 0-300"]
+    assert len(t.rows) == 1 and t.rows[0][:3] == ["1", "ε-greedy (ε=0.2)", "2 / 3"]  # UCB: no walls runs
+    v = t.values[0]
+    assert (v["curiosity different"], v["curiosity same"]) == (pytest.approx(1.5), pytest.approx(1.0))
+    assert v["curiosity p"] == pytest.approx(cl.welch_t([1.0, 2.0], [0.5, 1.0, 1.5])["p"])
+    assert (v["vae_loss different"], v["vae_loss same"]) == (pytest.approx(15.0), pytest.approx(10.0))
+    walls_rate = 1000 * np.array([1, 2, 3]) / np.array([300, 300, 100])
+    assert v["object_contacts different"] == pytest.approx(walls_rate.mean())
+    assert v["object_contacts same"] == pytest.approx(10.0)  # 3 contact steps in 300
+    assert v["object_contacts p"] == pytest.approx(cl.welch_t(walls_rate, [10.0, 10.0, 10.0])["p"])
+    assert t.rows[0][3] == f"1.5 vs 1 (p = {v['curiosity p']:.2g})"
+    # Two agents: the VAE loss is per image, the curiosity the mean of the agents.
+    d2 = fake_sweep("walls2", 2, [("eps", 0.2)], 15, walls="different")
+    s2 = fake_sweep("same2", 2, [("eps", 0.2)], 15)
+    d2.metrics["vae_loss"][:] = 40.0
+    d2.metrics["curiosity"][..., 0], d2.metrics["curiosity"][..., 1] = 1.0, 3.0
+    t2 = an.walls_table({"multi_agent_walls_different": d2, "multi_agent": s2}, late_steps=100)
+    assert (t2.values[0]["vae_loss different"], t2.values[0]["curiosity different"]) == (20.0, 2.0)
+    # Identical-walls runs shorter than the wall runs cannot be cut to their length: no row.
+    assert an.walls_table({"multi_agent_walls_different": s, "multi_agent": d}).rows == []

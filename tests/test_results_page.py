@@ -39,7 +39,7 @@ def test_the_page_is_what_the_committed_metrics_give(results):
     presets = results.load_presets()
     page = results.PAGE.read_text()
     blocks = results.blocks(page)
-    assert set(blocks) == {"scale", "figures", "claims", "power", "temperatures", "reconstructions"}
+    assert set(blocks) == {"scale", "figures", "claims", "power", "temperatures", "walls", "reconstructions"}
     assert blocks["figures"] == results.figures_block(presets, out=None)
     if presets:  # the CSV's full-precision numbers may differ in the last bit on another CPU's NumPy
         _assert_same_csv(results.CLAIMS_CSV.read_text(), an.claims_table(presets).to_csv())
@@ -268,6 +268,7 @@ def test_page_blocks_on_the_tiny_sweeps(results, tiny_sweeps_dir, tmp_path):
     assert len(drawn) == 9 and figures.count("![") == 9
     # The temperature and wall figures too, the tiny sweeps of matching agent count standing in.
     assert results.temperatures_block(presets).startswith("No Boltzmann temperature sweep")
+    assert results.walls_block(presets).startswith("No walls-different sweep")
     presets["boltzmann_temperatures"] = presets["multi_agent_walls_different"] = presets["multi_agent"]
     presets["boltzmann_low_temperatures"] = presets["multi_agent"]
     presets["single_agent_walls_different"] = presets["single_agent"]
@@ -279,6 +280,17 @@ def test_page_blocks_on_the_tiny_sweeps(results, tiny_sweeps_dir, tmp_path):
     n_t = len(presets["multi_agent"].groups("boltzmann"))
     assert temperatures.count(f"| across all {n_t} T, blocked by seed |") == 1
     assert "the two-agent sweep (`multi_agent`)" in temperatures and "| ε-greedy (ε=0.2) | 2 |" in temperatures
+    # Walls: each sweep standing for its own walls-different preset is its own comparison, every
+    # group against itself: equal means, no difference to test.
+    walls = results.walls_block(presets).splitlines()
+    assert [r.split(" | ")[:2] for r in walls[2:] if r.startswith("| ")] == (
+        [["| 1", g.label] for g in presets["single_agent"].groups()]
+        + [["| 2", g.label] for g in presets["multi_agent"].groups()])
+    assert "steps 0-200 |" in walls[0]
+    for row in (r for r in walls[2:] if r.startswith("| ")):
+        for cell in row.strip("| ").split(" | ")[3:]:
+            a, b = cell.split(" (")[0].split(" vs ")
+            assert a == b, row
     # Power from the tests with two seeds' values: the two-agent sweep's groups.
     rows = [r.split(" | ") for r in results.power_block(presets).splitlines()[2:] if r.startswith("| ")]
     assert rows and all(r[5] == "2" for r in rows), rows

@@ -33,6 +33,7 @@ Figure) it is given and returning it:
     temperature_table              per Boltzmann temperature: curiosity, action entropy, contacts;
                                    each tested across T, blocked by seed
     policy_measures_table          the same measures per policy of any sweep
+    walls_table                    different walls against identical ones, policy by policy
     power_table                    per test of each claim: the seeds it needs, the effect it detects
 
 and the numbers behind them (`moving_average`, `mean_ci`, `cumulative_interactions`,
@@ -42,8 +43,8 @@ orbax for checkpoints); plotting needs matplotlib.
 
 The package, by job; each module imports only those above it (sweeps none; stats, recon and
 action_values sweeps; tables sweeps and stats; claims sweeps, stats and tables; temperatures
-claims, stats and tables; power claims and tables; figures sweeps, stats, recon, action_values and
-temperatures):
+claims, stats and tables; walls claims, stats, sweeps and tables; power claims and tables;
+figures sweeps, stats, recon, action_values and temperatures):
 
     sweeps    loading: `load`, `find_sweeps`, `load_sweeps`, `merge_sweeps` (one experiment's seeds
               from several sweeps), `join_seed_parts` (every such experiment of a list merged),
@@ -67,6 +68,8 @@ temperatures):
     temperatures  what a Boltzmann sweep's temperatures change, run by run: `temperature_table`
               and the `temperature_measures` behind it; `policy_measures_table`, the same per
               policy
+    walls     what a different texture on every wall changes: `walls_table` (each walls-different
+              preset against its identical-walls preset, per policy) and `walls_measures`
     power     how many seeds each claim's tests need and the smallest effect they detect:
               `power_table`, and `seeds_needed`, `detectable`, `t_power`, `noncentral_t_sf` behind it
     figures   every `plot_*` function, the colours and labels they share, and saving
@@ -191,6 +194,7 @@ from mjx_curio.analysis.sweeps import (
 from mjx_curio.analysis.tables import Table, headline_table
 from mjx_curio.analysis.power import detectable, noncentral_t_sf, power_table, seeds_needed, t_power
 from mjx_curio.analysis.temperatures import policy_measures_table, temperature_measures, temperature_table
+from mjx_curio.analysis.walls import WALLS_PAIRS, walls_measures, walls_table
 
 __all__ = [
     # sweeps
@@ -208,6 +212,8 @@ __all__ = [
     "Table", "headline_table",
     # temperatures
     "policy_measures_table", "temperature_measures", "temperature_table",
+    # walls
+    "WALLS_PAIRS", "walls_measures", "walls_table",
     # power
     "detectable", "noncentral_t_sf", "power_table", "seeds_needed", "t_power",
     # claims
