@@ -3,8 +3,7 @@
 #
 #     bash experiments/reproduce.sh      # the scale of docs/results.md: 3 seeds (8 for the
 #                                        # two-agent and the one-agent experiment and for
-#                                        # one agent with different walls, 6 for two
-#                                        # agents with different walls); 40,000
+#                                        # one and two agents with different walls); 40,000
 #                                        # steps a run with one or two agents and for the
 #                                        # temperatures, 15,000 for the wall variants
 #     SEEDS=8 STEPS=80000 bash experiments/reproduce.sh
@@ -22,7 +21,7 @@
 # (multi_agent) has MULTI_SEEDS (default 8) in all and the one-agent experiment (single_agent)
 # SINGLE_SEEDS (default 8), and one agent with a different texture on every wall
 # (single_agent_walls_different) SINGLE_WALL_SEEDS (default 8), and two agents with a different
-# texture on every wall (multi_agent_walls_different) MULTI_WALL_SEEDS (default 6): the first SEEDS in
+# texture on every wall (multi_agent_walls_different) MULTI_WALL_SEEDS (default 8): the first SEEDS in
 # runs/paper/<preset> and the rest, as they ran for the page, in sweeps of their own of at most 3
 # seeds each (runs/paper/<preset>.seeds-3-5 and runs/paper/<preset>.seeds-6-7: each fits a 3-hour
 # session on 2 cores), which the page reads with the first as one experiment
@@ -45,6 +44,7 @@
 #   multi_agent_walls_different   9 runs x 15,000 steps   59 min (38.3 run-steps/s), on another 2-core AMD
 #                                 EPYC (family 26 model 2, with AVX-512 and bf16): not comparable with the rows above
 #   multi_agent_walls_different.seeds-3-5  9 runs x 15,000 steps   1 h 40 min (26.5-30 run-steps/s alone; paused about 10 min), on the Intel Xeon above
+#   multi_agent_walls_different.seeds-6-7  6 runs x 15,000 steps   1 h 16 min (18.9-22.1 run-steps/s; tests ran beside it for 17 min), on the AMD EPYC of the first rows
 #   the page (snapshot, figures, claims)     about 5 s
 #   temperature_evidence.py                 about 1 min a sweep
 #   reconstruction_evidence.py              about 2 min a sweep of 9 runs with 4 checkpoints (beside a running sweep)
@@ -60,7 +60,7 @@ SEEDS=${SEEDS:-3}
 MULTI_SEEDS=${MULTI_SEEDS:-8}
 SINGLE_SEEDS=${SINGLE_SEEDS:-8}
 SINGLE_WALL_SEEDS=${SINGLE_WALL_SEEDS:-8}
-MULTI_WALL_SEEDS=${MULTI_WALL_SEEDS:-6}
+MULTI_WALL_SEEDS=${MULTI_WALL_SEEDS:-8}
 STEPS=${STEPS:-}
 MULTI_STEPS=${MULTI_STEPS:-${STEPS:-40000}}
 SINGLE_STEPS=${SINGLE_STEPS:-${STEPS:-40000}}

@@ -362,7 +362,9 @@ def test_reproduce_run_lengths_per_sweep_and_steps_for_all(settings, want):
                      ("single_agent_walls_different", "2", "6", str(want["single_agent_walls_different"]),
                       "runs/paper/single_agent_walls_different.seeds-6-7"),
                      ("multi_agent_walls_different", "3", "3", str(want["multi_agent_walls_different"]),
-                      "runs/paper/multi_agent_walls_different.seeds-3-5")]
+                      "runs/paper/multi_agent_walls_different.seeds-3-5"),
+                     ("multi_agent_walls_different", "2", "6", str(want["multi_agent_walls_different"]),
+                      "runs/paper/multi_agent_walls_different.seeds-6-7")]
     # Then the evidence from their checkpoints, then the page.
     evidence = re.findall(r"experiments/(\w+)_evidence\.py runs/paper/(\S+)", done.stdout)
     assert evidence == [("temperature", "boltzmann_temperatures"), ("temperature", "boltzmann_low_temperatures"),
