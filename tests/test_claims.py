@@ -605,3 +605,6 @@ def test_walls_table_on_planted_runs():
     assert (t2.values[0]["vae_loss different"], t2.values[0]["curiosity different"]) == (20.0, 2.0)
     # Identical-walls runs shorter than the wall runs cannot be cut to their length: no row.
     assert an.walls_table({"multi_agent_walls_different": s, "multi_agent": d}).rows == []
+    for bad in (0, -100, 2.5):
+        with pytest.raises(ValueError, match="late_steps"):
+            an.walls_table({}, late_steps=bad)

@@ -65,6 +65,8 @@ def walls_table(presets: Mapping[str, Sweep], late_steps: int = 5000) -> Table:
     (`walls_measures`), the mean with different walls, the mean with identical walls, and the
     two-sided Welch p of their difference. `values`: per row the presets, group, runs a side (those
     with a finite value), and per measure both means, the difference and p."""
+    if not (isinstance(late_steps, (int, np.integer)) and late_steps > 0):
+        raise ValueError(f"walls_table: late_steps={late_steps!r}; want a positive whole number of steps")
     columns = ["agents", "policy", "runs (different / same walls)"]
     columns += [f"{what}{', steps {late}' if key != 'object_contacts' else ', steps {whole}'}"
                 for key, what, _ in MEASURES]
