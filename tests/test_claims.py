@@ -588,6 +588,7 @@ def test_walls_table_on_planted_runs():
                              "object contacts per 1,000 agent-steps, steps 0-300"]
     assert len(t.rows) == 1 and t.rows[0][:3] == ["1", "ε-greedy (ε=0.2)", "2 / 3"]  # UCB: no walls runs
     v = t.values[0]
+    assert v["steps"] == 300 and (v["runs different"], v["runs same"]) == (2, 3)
     assert (v["curiosity different"], v["curiosity same"]) == (pytest.approx(1.5), pytest.approx(1.0))
     assert v["curiosity p"] == pytest.approx(cl.welch_t([1.0, 2.0], [0.5, 1.0, 1.5])["p"])
     assert (v["vae_loss different"], v["vae_loss same"]) == (pytest.approx(15.0), pytest.approx(10.0))

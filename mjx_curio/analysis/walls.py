@@ -63,8 +63,8 @@ def walls_table(presets: Mapping[str, Sweep], late_steps: int = 5000) -> Table:
     (`WALLS_PAIRS`) also ran, over the walls-different sweep's steps (the identical-walls runs cut
     to the same length; a pair where they are shorter is left out): per measure
     (`walls_measures`), the mean with different walls, the mean with identical walls, and the
-    two-sided Welch p of their difference. `values`: per row the presets, group, runs a side (those
-    with a finite value), and per measure both means, the difference and p."""
+    two-sided Welch p of their difference. `values`: per row the presets, group, steps compared, runs
+    a side (those with a finite value), and per measure both means, the difference and p."""
     if not (isinstance(late_steps, (int, np.integer)) and late_steps > 0):
         raise ValueError(f"walls_table: late_steps={late_steps!r}; want a positive whole number of steps")
     columns = ["agents", "policy", "runs (different / same walls)"]
@@ -86,7 +86,7 @@ def walls_table(presets: Mapping[str, Sweep], late_steps: int = 5000) -> Table:
             n_d = int(np.isfinite(md["curiosity"][g.indices]).sum())
             n_s = int(np.isfinite(ms["curiosity"][h.indices]).sum())
             row = [str(d.n_agents), g.label, f"{n_d} / {n_s}"]
-            vals = {"different": different, "same": same, "agents": d.n_agents, "group": g.label,
+            vals = {"different": different, "same": same, "agents": d.n_agents, "group": g.label, "steps": end,
                     "runs different": n_d, "runs same": n_s}
             for key, _, fmt in MEASURES:
                 t = welch_t(md[key][g.indices], ms[key][h.indices])
@@ -99,7 +99,7 @@ def walls_table(presets: Mapping[str, Sweep], late_steps: int = 5000) -> Table:
     if len(spans) == 1:
         (start, end), = spans
         columns = [c.replace("{late}", f"{start:,}-{end:,}").replace("{whole}", f"0-{end:,}") for c in columns]
-    else:  # pairs of different lengths: each row's span is in its values
+    else:  # pairs of different lengths: each row's length is its values' "steps"
         columns = [c.replace(", steps {late}", f", last {late_steps:,} steps").replace(", steps {whole}", "")
                    for c in columns]
     note = ("Walls different vs identical walls, the same agents and policy: means over runs (seeds), the "
