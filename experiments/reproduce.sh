@@ -107,8 +107,8 @@ seed_parts multi_agent_walls_different "$WALL_STEPS" "$MULTI_WALL_SEEDS" multi_w
 # Each needs its sweep's newest checkpoint (the one that keeps the replay buffers).
 "$PY" experiments/temperature_evidence.py runs/paper/boltzmann_temperatures
 "$PY" experiments/temperature_evidence.py runs/paper/boltzmann_low_temperatures
-# Figs. 7 (one agent) and 13 (one agent, every wall different), and the two-agent sweep's VAE.
-for part in "${single_parts[@]}" "${wall_parts[@]}" "${multi_parts[@]}"; do
+# Figs. 7 (one agent) and 13 (one agent, every wall different), and the two-agent sweeps' VAEs.
+for part in "${single_parts[@]}" "${wall_parts[@]}" "${multi_parts[@]}" "${multi_wall_parts[@]}"; do
     "$PY" experiments/reconstruction_evidence.py "$part"  # each part keeps its own checkpoints
 done
 "$PY" experiments/results.py snapshot runs/paper

@@ -374,7 +374,10 @@ def test_reproduce_run_lengths_per_sweep_and_steps_for_all(settings, want):
                         ("reconstruction", "single_agent_walls_different.seeds-3-5"),
                         ("reconstruction", "single_agent_walls_different.seeds-6-7"),
                         ("reconstruction", "multi_agent"), ("reconstruction", "multi_agent.seeds-3-5"),
-                        ("reconstruction", "multi_agent.seeds-6-7")]
+                        ("reconstruction", "multi_agent.seeds-6-7"),
+                        ("reconstruction", "multi_agent_walls_different"),
+                        ("reconstruction", "multi_agent_walls_different.seeds-3-5"),
+                        ("reconstruction", "multi_agent_walls_different.seeds-6-7")]
     assert done.stdout.rstrip().endswith("experiments/results.py check")
 
 
