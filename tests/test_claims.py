@@ -573,7 +573,9 @@ def test_walls_table_on_planted_runs():
         sweep.metrics["curiosity"][:, 10:15, 0] = np.array(level)[:, None]
         sweep.metrics["vae_loss"][:] = 1e4
         sweep.metrics["vae_loss"][:, 10:15] = 10 * np.array(level)[:, None]
-    s.metrics["curiosity"][:, 15:] = s.metrics["vae_loss"][:, 15:] = -1e6
+        sweep.metrics["recon"][:] = 1e4
+        sweep.metrics["recon"][:, 10:15] = 7 * np.array(level)[:, None]
+    s.metrics["curiosity"][:, 15:] = s.metrics["vae_loss"][:, 15:] = s.metrics["recon"][:, 15:] = -1e6
     # Contacts over all 300 steps: walls run i touches on i + 1 steps; identical-walls runs on 3,
     # and on every step after step 300.
     for i in range(3):
@@ -581,10 +583,11 @@ def test_walls_table_on_planted_runs():
     s.metrics["contact_object"][:, 1, 0, 1] = 3
     s.metrics["contact_object"][:, 15:, 0, 0] = 20
     # The third walls run diverged: no late windows (its contacts still count over its steps).
-    d.metrics["curiosity"][2, 5:] = d.metrics["vae_loss"][2, 5:] = np.nan
+    d.metrics["curiosity"][2, 5:] = d.metrics["vae_loss"][2, 5:] = d.metrics["recon"][2, 5:] = np.nan
     d.metrics["steps_taken"][2, 5:] = 0
     t = an.walls_table({"single_agent_walls_different": d, "single_agent": s}, late_steps=100)
     assert t.columns[3:] == ["curiosity, steps 200-300", "VAE loss per image, steps 200-300",
+                             "of which reconstruction, steps 200-300",
                              "object contacts per 1,000 agent-steps, steps 0-300"]
     assert len(t.rows) == 1 and t.rows[0][:3] == ["1", "ε-greedy (ε=0.2)", "2 / 3"]  # UCB: no walls runs
     v = t.values[0]
@@ -592,6 +595,7 @@ def test_walls_table_on_planted_runs():
     assert (v["curiosity different"], v["curiosity same"]) == (pytest.approx(1.5), pytest.approx(1.0))
     assert v["curiosity p"] == pytest.approx(cl.welch_t([1.0, 2.0], [0.5, 1.0, 1.5])["p"])
     assert (v["vae_loss different"], v["vae_loss same"]) == (pytest.approx(15.0), pytest.approx(10.0))
+    assert (v["recon different"], v["recon same"]) == (pytest.approx(10.5), pytest.approx(7.0))
     walls_rate = 1000 * np.array([1, 2, 3]) / np.array([300, 300, 100])
     assert v["object_contacts different"] == pytest.approx(walls_rate.mean())
     assert v["object_contacts same"] == pytest.approx(10.0)  # 3 contact steps in 300
@@ -601,9 +605,11 @@ def test_walls_table_on_planted_runs():
     d2 = fake_sweep("walls2", 2, [("eps", 0.2)], 15, walls="different")
     s2 = fake_sweep("same2", 2, [("eps", 0.2)], 15)
     d2.metrics["vae_loss"][:] = 40.0
+    d2.metrics["recon"][:] = 30.0
     d2.metrics["curiosity"][..., 0], d2.metrics["curiosity"][..., 1] = 1.0, 3.0
     t2 = an.walls_table({"multi_agent_walls_different": d2, "multi_agent": s2}, late_steps=100)
-    assert (t2.values[0]["vae_loss different"], t2.values[0]["curiosity different"]) == (20.0, 2.0)
+    assert (t2.values[0]["vae_loss different"], t2.values[0]["recon different"]) == (20.0, 15.0)
+    assert t2.values[0]["curiosity different"] == 2.0
     # Identical-walls runs shorter than the wall runs cannot be cut to their length: no row.
     assert an.walls_table({"multi_agent_walls_different": s, "multi_agent": d}).rows == []
     for bad in (0, -100, 2.5):

@@ -28,6 +28,7 @@ WALLS_PAIRS = (("single_agent_walls_different", "single_agent"), ("multi_agent_w
 MEASURES = (
     ("curiosity", "curiosity", ".3g"),
     ("vae_loss", "VAE loss per image", ".1f"),
+    ("recon", "of which reconstruction", ".1f"),
     ("object_contacts", "object contacts per 1,000 agent-steps", ".3g"),
 )
 
@@ -35,7 +36,9 @@ MEASURES = (
 def walls_measures(sweep: Sweep, end: int, late_steps: int) -> dict[str, np.ndarray]:
     """{measure: [runs]} over the sweep's first `end` steps. Over the windows lying wholly in the
     last `late_steps` of them: `curiosity`, the mean of the agents, then of the windows;
-    `vae_loss`, the VAE's loss per image (`stats.per_agent_vae_loss`). Over all `end` steps:
+    `vae_loss`, the VAE's loss per image (`stats.per_agent_vae_loss`), and `recon`, its
+    reconstruction term (summed squared pixel error per image; the rest is the KL term). Over all
+    `end` steps:
     `object_contacts`, agent-object contact steps (agents and objects summed) per 1,000
     agent-steps taken. NaN for a run with no such window (one that diverged before)."""
     e = sweep.metrics_every
@@ -46,8 +49,9 @@ def walls_measures(sweep: Sweep, end: int, late_steps: int) -> dict[str, np.ndar
         warnings.simplefilter("ignore", RuntimeWarning)  # a diverged run's all-NaN windows
         curiosity = np.nanmean(np.nanmean(sweep.metrics["curiosity"][:, late], axis=2), axis=1)
         vae = np.nanmean(per_agent_vae_loss(sweep)[:, late], axis=1)
+        recon = np.nanmean(sweep.metrics["recon"][:, late] / sweep.n_agents, axis=1)
     contacts = object_contacts(sweep)[:, whole].astype(float).sum(axis=1)
-    return {"curiosity": curiosity, "vae_loss": vae,
+    return {"curiosity": curiosity, "vae_loss": vae, "recon": recon,
             "object_contacts": np.where(steps > 0, 1000 * contacts / np.maximum(steps, 1), np.nan)}
 
 
@@ -104,7 +108,8 @@ def walls_table(presets: Mapping[str, Sweep], late_steps: int = 5000) -> Table:
                    for c in columns]
     note = ("Walls different vs identical walls, the same agents and policy: means over runs (seeds), the "
             "identical-walls runs cut to the walls-different runs' length; p: Welch's two-sided t-test, runs as "
-            "units. Curiosity: the mean of the agents; VAE loss: per image (a two-agent loss halved), nats.")
+            "units. Curiosity: the mean of the agents; VAE loss: per image (a two-agent loss halved), nats, of which "
+            "the reconstruction term, the summed squared pixel error (the rest is the KL term).")
     return Table(columns, rows, values, note)
 
 
