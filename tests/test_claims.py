@@ -600,7 +600,19 @@ def test_walls_table_on_planted_runs():
     assert v["object_contacts different"] == pytest.approx(walls_rate.mean())
     assert v["object_contacts same"] == pytest.approx(10.0)  # 3 contact steps in 300
     assert v["object_contacts p"] == pytest.approx(cl.welch_t(walls_rate, [10.0, 10.0, 10.0])["p"])
-    assert t.rows[0][3] == f"1.5 vs 1 (p = {v['curiosity p']:.2g})"
+    # Not significant (p ~ 0.4): the seeds a side for 80 % power at the difference seen, in the cell.
+    need = an.seeds_needed(cl.Tested(np.array([1.0, 2.0]), np.array([0.5, 1.0, 1.5])))
+    assert v["curiosity p"] > 0.05 and v["curiosity seeds for 80 % power"] == need and 8 < need < 10_000
+    assert t.rows[0][3] == f"1.5 vs 1 (p = {v['curiosity p']:.2g}; {int(need)} seeds)"
+    # The identical-walls side the larger: the same count (a two-sided test); a significant
+    # difference, or none at all, has no count.
+    from mjx_curio.analysis import walls
+    x, y = [0.5, 1.0, 1.5], [1.0, 2.0]
+    assert walls._seeds_for_power(x, y, cl.welch_t(x, y)) == need
+    assert v["vae_loss seeds for 80 % power"] == need  # ten times the curiosity's values: the same test
+    assert math.isnan(walls._seeds_for_power([1.0, 1.1, 0.9], [5.0, 5.1, 4.9], cl.welch_t([1.0, 1.1, 0.9], [5.0, 5.1, 4.9])))
+    same = an.walls_table({"single_agent_walls_different": s, "single_agent": s}, late_steps=100)
+    assert all(math.isnan(x) for k, x in same.values[0].items() if k.endswith("power"))
     # Two agents: the VAE loss is per image, the curiosity the mean of the agents.
     d2 = fake_sweep("walls2", 2, [("eps", 0.2)], 15, walls="different")
     s2 = fake_sweep("same2", 2, [("eps", 0.2)], 15)

@@ -43,8 +43,8 @@ orbax for checkpoints); plotting needs matplotlib.
 
 The package, by job; each module imports only those above it (sweeps none; stats, recon and
 action_values sweeps; tables sweeps and stats; claims sweeps, stats and tables; temperatures
-claims, stats and tables; walls claims, stats, sweeps and tables; power claims and tables;
-figures sweeps, stats, recon, action_values and temperatures):
+claims, stats and tables; power claims and tables; walls claims, power, stats, sweeps and
+tables; figures sweeps, stats, recon, action_values and temperatures):
 
     sweeps    loading: `load`, `find_sweeps`, `load_sweeps`, `merge_sweeps` (one experiment's seeds
               from several sweeps), `join_seed_parts` (every such experiment of a list merged),
@@ -68,10 +68,10 @@ figures sweeps, stats, recon, action_values and temperatures):
     temperatures  what a Boltzmann sweep's temperatures change, run by run: `temperature_table`
               and the `temperature_measures` behind it; `policy_measures_table`, the same per
               policy
-    walls     what a different texture on every wall changes: `walls_table` (each walls-different
-              preset against its identical-walls preset, per policy) and `walls_measures`
     power     how many seeds each claim's tests need and the smallest effect they detect:
               `power_table`, and `seeds_needed`, `detectable`, `t_power`, `noncentral_t_sf` behind it
+    walls     what a different texture on every wall changes: `walls_table` (each walls-different
+              preset against its identical-walls preset, per policy) and `walls_measures`
     figures   every `plot_*` function, the colours and labels they share, and saving
               (`figures_dir`, `save_figure`, `save_text`, `empty_axes`, `slug`)
 

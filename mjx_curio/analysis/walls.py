@@ -3,9 +3,11 @@ of the same agents with identical walls, policy by policy, over the steps both r
 (`walls_table`). The paper runs both arenas (its section 3.1) but names only one one-agent run as
 having different walls, and compares nothing; this table is the comparison it leaves out.
 
-Runs are the units (Welch's t-test across seeds); a run whose simulation diverged counts only
-where its windows are data (`sweeps.drop_diverged` blanks the rest). Imports `claims`, `stats`,
-`sweeps` and `tables`.
+Runs are the units (Welch's t-test across seeds); where a difference is not significant, the
+seeds a side the test would need to find it 8 times in 10 (`power.seeds_needed`, the observed
+spread taken as the truth). A run whose simulation diverged counts only where its windows are data
+(`sweeps.drop_diverged` blanks the rest). Imports `claims`, `power`, `stats`, `sweeps` and
+`tables`.
 """
 
 from __future__ import annotations
@@ -16,7 +18,8 @@ from typing import Mapping
 
 import numpy as np
 
-from mjx_curio.analysis.claims import welch_t
+from mjx_curio.analysis.claims import ALPHA, Tested, welch_t
+from mjx_curio.analysis.power import MAX_SEEDS, seeds_needed
 from mjx_curio.analysis.stats import object_contacts, per_agent_vae_loss
 from mjx_curio.analysis.sweeps import Group, Sweep
 from mjx_curio.analysis.tables import Table
@@ -67,8 +70,10 @@ def walls_table(presets: Mapping[str, Sweep], late_steps: int = 5000) -> Table:
     (`WALLS_PAIRS`) also ran, over the walls-different sweep's steps (the identical-walls runs cut
     to the same length; a pair where they are shorter is left out): per measure
     (`walls_measures`), the mean with different walls, the mean with identical walls, and the
-    two-sided Welch p of their difference. `values`: per row the presets, group, steps compared, runs
-    a side (those with a finite value), and per measure both means, the difference and p."""
+    two-sided Welch p of their difference, and where p >= 0.05 the seeds a side that would find
+    the observed difference with 80 % power (`power.seeds_needed`). `values`: per row the presets,
+    group, steps compared, runs a side (those with a finite value), and per measure both means,
+    the difference, p and those seeds (NaN where significant or no difference was seen)."""
     if not (isinstance(late_steps, (int, np.integer)) and late_steps > 0):
         raise ValueError(f"walls_table: late_steps={late_steps!r}; want a positive whole number of steps")
     columns = ["agents", "policy", "runs (different / same walls)"]
@@ -95,9 +100,15 @@ def walls_table(presets: Mapping[str, Sweep], late_steps: int = 5000) -> Table:
             for key, _, fmt in MEASURES:
                 t = welch_t(md[key][g.indices], ms[key][h.indices])
                 a, b = _nanmean(md[key][g.indices]), _nanmean(ms[key][h.indices])
+                need = _seeds_for_power(md[key][g.indices], ms[key][h.indices], t)
                 p = f"p = {t['p']:.2g}" if math.isfinite(t["p"]) else "p n/a"
+                if math.isfinite(need):
+                    p += f"; {int(need):,} seeds"
+                elif math.isinf(need):
+                    p += f"; > {MAX_SEEDS:,} seeds"
                 row.append(f"{a:{fmt}} vs {b:{fmt}} ({p})")
-                vals.update({f"{key} different": a, f"{key} same": b, f"{key} diff": t["diff"], f"{key} p": t["p"]})
+                vals.update({f"{key} different": a, f"{key} same": b, f"{key} diff": t["diff"], f"{key} p": t["p"],
+                             f"{key} seeds for 80 % power": need})
             rows.append(row)
             values.append(vals)
     if len(spans) == 1:
@@ -108,9 +119,20 @@ def walls_table(presets: Mapping[str, Sweep], late_steps: int = 5000) -> Table:
                    for c in columns]
     note = ("Walls different vs identical walls, the same agents and policy: means over runs (seeds), the "
             "identical-walls runs cut to the walls-different runs' length; p: Welch's two-sided t-test, runs as "
-            "units. Curiosity: the mean of the agents; VAE loss: per image (a two-agent loss halved), nats, of which "
-            "the reconstruction term, the summed squared pixel error (the rest is the KL term).")
+            "units; where not significant, after p: the seeds a side that would find the difference seen 8 times in "
+            "10, its spread taken as the truth. Curiosity: the mean of the agents; VAE loss: per image (a two-agent loss "
+            "halved), nats, of which the reconstruction term, the summed squared pixel error (the rest is the KL "
+            "term).")
     return Table(columns, rows, values, note)
+
+
+def _seeds_for_power(x, y, welch: dict) -> float:
+    """Seeds a side for 80 % power at the observed difference of a test that did not find it
+    (p >= ALPHA); NaN where it did, or where the test had nothing to go on."""
+    if not (math.isfinite(welch["p"]) and welch["p"] >= ALPHA and welch["diff"] != 0):
+        return math.nan
+    hi, lo = (x, y) if welch["diff"] > 0 else (y, x)  # a two-sided test: either way is the effect
+    return seeds_needed(Tested(np.asarray(hi, float), np.asarray(lo, float)))
 
 
 def _nanmean(x) -> float:
