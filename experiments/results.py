@@ -19,7 +19,7 @@ measure (`analysis.temperature_table`), different walls against identical ones
 (`analysis.walls_table`) and the reconstructions' quality over training (from
 docs/results/reconstructions.json, which `reconstruction_evidence.py` writes); the rest
 of the page (what the verdicts mean, why a claim may fail here) is prose and stays as written.
-The claims' numbers also go to docs/results/claims.csv.
+The claims' numbers also go to docs/results/claims.csv, the walls table's to docs/results/walls.csv.
 
 `check` recomputes the scale, claims, power, temperatures, walls and reconstructions blocks from the
 committed results and exits 1 if they differ from the page (the test suite does the same).
@@ -42,6 +42,7 @@ SNAPSHOTS = ROOT / "experiments" / "results"
 PAGE = ROOT / "docs" / "results.md"
 FIGURES = ROOT / "docs" / "figures" / "results"
 CLAIMS_CSV = ROOT / "docs" / "results" / "claims.csv"
+WALLS_CSV = ROOT / "docs" / "results" / "walls.csv"
 RECONSTRUCTIONS = ROOT / "docs" / "results" / "reconstructions.json"  # reconstruction_evidence.py writes it
 SNAPSHOT_FILES = ("manifest.json", "progress.json")  # plus metrics/*.npy
 DPI = 80
@@ -529,7 +530,8 @@ def write_page(src: pathlib.Path = SNAPSHOTS) -> None:
     PAGE.write_text(fill(PAGE.read_text(), new))
     CLAIMS_CSV.parent.mkdir(parents=True, exist_ok=True)
     CLAIMS_CSV.write_text(an.claims_table(presets).to_csv())
-    print(f"wrote {PAGE}, {CLAIMS_CSV} and {len(list(FIGURES.glob('*.png')))} figures in {FIGURES}")
+    WALLS_CSV.write_text(an.walls_table(presets).to_csv())
+    print(f"wrote {PAGE}, {CLAIMS_CSV}, {WALLS_CSV} and {len(list(FIGURES.glob('*.png')))} figures in {FIGURES}")
 
 
 def check_page(src: pathlib.Path = SNAPSHOTS) -> list[str]:
