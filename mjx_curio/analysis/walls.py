@@ -18,7 +18,7 @@ from typing import Mapping
 
 import numpy as np
 
-from mjx_curio.analysis.claims import ALPHA, Tested, welch_t
+from mjx_curio.analysis.claims import ALPHA, Tested, _finite, welch_t
 from mjx_curio.analysis.power import MAX_SEEDS, seeds_needed
 from mjx_curio.analysis.stats import object_contacts, per_agent_vae_loss
 from mjx_curio.analysis.sweeps import Group, Sweep
@@ -41,9 +41,8 @@ def walls_measures(sweep: Sweep, end: int, late_steps: int) -> dict[str, np.ndar
     last `late_steps` of them: `curiosity`, the mean of the agents, then of the windows;
     `vae_loss`, the VAE's loss per image (`stats.per_agent_vae_loss`), and `recon`, its
     reconstruction term (summed squared pixel error per image; the rest is the KL term). Over all
-    `end` steps:
-    `object_contacts`, agent-object contact steps (agents and objects summed) per 1,000
-    agent-steps taken. NaN for a run with no such window (one that diverged before)."""
+    `end` steps: `object_contacts`, agent-object contact steps (agents and objects summed) per
+    1,000 agent-steps taken. NaN for a run with no such window (one that diverged before)."""
     e = sweep.metrics_every
     late = slice(-(-max(end - late_steps, 0) // e), end // e)
     whole = slice(0, end // e)
@@ -136,6 +135,5 @@ def _seeds_for_power(x, y, welch: dict) -> float:
 
 
 def _nanmean(x) -> float:
-    x = np.asarray(x, float)
-    x = x[np.isfinite(x)]
+    x = _finite(x)
     return float(x.mean()) if len(x) else math.nan
