@@ -17,11 +17,13 @@ sweeps, the figures with their captions, the claims table (`analysis.claims_tabl
 seeds each claim's tests need (`analysis.power_table`), the Boltzmann temperatures measure by
 measure (`analysis.temperature_table`), different walls against identical ones
 (`analysis.walls_table`) and the reconstructions' quality over training (from
-docs/results/reconstructions.json, which `reconstruction_evidence.py` writes); the rest
+docs/results/reconstructions.json, which `reconstruction_evidence.py` writes) and the main job
+at its full length (from docs/results/full_length.json, which `full_length_evidence.py` writes,
+with its figure); the rest
 of the page (what the verdicts mean, why a claim may fail here) is prose and stays as written.
 The claims' numbers also go to docs/results/claims.csv, the walls table's to docs/results/walls.csv.
 
-`check` recomputes the scale, claims, power, temperatures, walls and reconstructions blocks from the
+`check` recomputes the scale, claims, power, temperatures, walls, reconstructions and full-length blocks from the
 committed results and exits 1 if they differ from the page (the test suite does the same).
 """
 
@@ -44,6 +46,7 @@ FIGURES = ROOT / "docs" / "figures" / "results"
 CLAIMS_CSV = ROOT / "docs" / "results" / "claims.csv"
 WALLS_CSV = ROOT / "docs" / "results" / "walls.csv"
 RECONSTRUCTIONS = ROOT / "docs" / "results" / "reconstructions.json"  # reconstruction_evidence.py writes it
+FULL_LENGTH = ROOT / "docs" / "results" / "full_length.json"  # full_length_evidence.py writes it
 SNAPSHOT_FILES = ("manifest.json", "progress.json")  # plus metrics/*.npy
 DPI = 80
 
@@ -247,6 +250,106 @@ def reconstructions_block(path: pathlib.Path = RECONSTRUCTIONS) -> str:
         return "No sweep's reconstructions have been measured yet (`experiments/reconstruction_evidence.py`).\n"
     return "\n".join(f"{reconstructions_table(e)}\n![{name}_reconstructions](figures/{name}_reconstructions.png)\n"
                      for name, e in sorted(newest.items()))
+
+
+def _device(d: dict | list) -> str:
+    """'one NVIDIA H200', 'a CPU (AMD EPYC)' or, for a sweep merged from parts, 'CPUs (AMD EPYC, ...)'."""
+    ds = d if isinstance(d, list) else [d]
+    if all(x.get("platform") == "gpu" for x in ds) and len({x.get("kind") for x in ds}) == 1:
+        return f"one {ds[0]['kind']}" if len(ds) == 1 else f"{ds[0]['kind']}s"
+    names = list(dict.fromkeys(x.get("cpu", "?") for x in ds))
+    return f"a CPU ({names[0]})" if len(names) == 1 and len(ds) == 1 else f"CPUs ({', '.join(names)})"
+
+
+def _mean(xs) -> float:
+    v = [x for x in xs if x is not None]
+    return sum(v) / len(v) if v else float("nan")
+
+
+def _p(v) -> str:
+    return f"{v:.2g}" if v is not None else "—"
+
+
+def full_length_block(path: pathlib.Path = FULL_LENGTH) -> str:
+    """Markdown of full_length.json (`full_length_evidence.py`): the claims at the full run length,
+    the same runs on two platforms, the second half against the first, and the figure."""
+    if not path.exists():
+        return "No sweep of the paper's full length has been measured yet (`experiments/full_length_evidence.py`).\n"
+    e = json.loads(path.read_text())
+    c = e["committed"]
+    late = e["late_steps"]
+    a, b = c["steps"] - late, c["steps"]
+    fmt = {"curiosity": ".3g", "vae_loss": ".1f", "recon": ".1f", "object_contacts": ".3g"}
+    lines = [f"`{e['sweep']}`: {e['runs']} runs × {e['steps']:,} steps on {_device(e['device'])}, beside the "
+             f"committed runs `{c['sweep']}` ({c['runs']} runs × {c['steps']:,} steps on {_device(c['devices'])}).", "",
+             f"The claims the two-agent sweep can test alone, at {e['steps']:,} steps (the claims table above has "
+             f"them at {c['steps']:,}):", "",
+             "| # | claim | our statistic | verdict |", "|---|---|---|---|"]
+    lines += [f"| {r['claim']} | {r['text']} | {r['statistic']} | {r['verdict']} |" for r in e["claims"]]
+
+    def rows(entries, left, right):
+        out = []
+        for r in entries:
+            f = fmt.get(r["measure"], ".3g")
+            d = f"{r['diff']:+{f}}" if r["diff"] is not None else "—"
+            out.append(f"| {r['group']} | {r['what']} | {_mean(r[left]):{f}} | {_mean(r[right]):{f}} | {d} "
+                       f"| {_p(r['p'])} | {_p(r['p_holm'])} |")
+        return out
+
+    n = sum(r["p"] is not None for r in e["platforms"])
+    lines += ["", f"The same settings and seeds on the two platforms, over the steps both ran: curiosity, the VAE loss "
+              f"per image and its reconstruction term over steps {a:,}-{b:,}, object contacts per 1,000 agent-steps "
+              f"over 0-{b:,}; means over seeds, Welch's two-sided t-test, and Holm's correction over the table's "
+              f"{n} tests:", "",
+              f"| policy | measure | {_device(e['device'])} | {_device(c['devices'])} | difference | p | p (Holm) |",
+              "|---|---|---|---|---|---|---|"]
+    lines += rows(e["platforms"], "long", "short")
+    m = sum(r["p"] is not None for r in e["halves"])
+    lines += ["", f"What the second half of the run changes: the same measures, object contacts too, over steps "
+              f"{e['steps'] - late:,}-{e['steps']:,} against {a:,}-{b:,}, run by run; the paired two-sided t-test, "
+              f"Holm over {m} tests:", "",
+              f"| policy | measure | steps {a:,}-{b:,} | steps {e['steps'] - late:,}-{e['steps']:,} | difference | p "
+              "| p (Holm) |",
+              "|---|---|---|---|---|---|---|"]
+    lines += rows(e["halves"], "first", "second")
+    lines += ["", "![full_length_curiosity](figures/results/full_length_curiosity.png)", "",
+              f"*Curiosity (the mean of the two agents) in bins of {e['curves']['bin_steps']:,} steps, mean over seeds "
+              f"with its 95 % CI: the {e['runs']} runs of {e['steps']:,} steps (solid) and the committed runs of "
+              f"{c['steps']:,} (dashed).*"]
+    return "\n".join(lines) + "\n"
+
+
+def full_length_figure(path: pathlib.Path = FULL_LENGTH, out: pathlib.Path = FIGURES) -> None:
+    """docs/figures/results/full_length_curiosity.png from full_length.json: one panel a policy."""
+    if not path.exists():
+        return
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    from mjx_curio import analysis as an
+
+    e = json.loads(path.read_text())
+    cv = e["curves"]
+    groups = list(cv["groups"])
+    fig, axes = plt.subplots(1, len(groups), figsize=(4.0 * len(groups), 3.2), sharey=True, squeeze=False)
+    for ax, label in zip(axes[0], groups):
+        for side, groups_of, style in (("long", cv["groups"], "-"), ("short", cv["short"]["groups"], "--")):
+            curve = cv[side]
+            x = np.asarray(curve["steps"]) / 1000
+            y = np.asarray([curve["runs"][i] for i in groups_of[label]], dtype=float)
+            mean, lo, hi, _ = an.mean_ci(y)
+            dev = _device(e["device"] if side == "long" else e["committed"]["devices"])
+            line, = ax.plot(x, mean, style, lw=1.2, label=f"{dev}, {len(y)} seeds")
+            ax.fill_between(x, lo, hi, color=line.get_color(), alpha=0.2, lw=0)
+        ax.set_title(label, fontsize=9)
+        ax.set_xlabel("agent step (thousands)")
+        ax.legend(fontsize=7)
+    axes[0][0].set_ylabel("curiosity")
+    fig.tight_layout()
+    an.save_figure(fig, out, "full_length_curiosity", dpi=DPI)
+    plt.close(fig)
 
 
 def claims_block(presets: dict) -> str:
@@ -518,7 +621,7 @@ def computed_blocks(presets: dict) -> dict[str, str]:
     reconstructions.json for the reconstructions block (what `check` compares)."""
     return {"scale": scale_block(presets), "claims": claims_block(presets), "power": power_block(presets),
             "temperatures": temperatures_block(presets), "walls": walls_block(presets),
-            "reconstructions": reconstructions_block()}
+            "reconstructions": reconstructions_block(), "full_length": full_length_block()}
 
 
 def write_page(src: pathlib.Path = SNAPSHOTS) -> None:
@@ -527,6 +630,7 @@ def write_page(src: pathlib.Path = SNAPSHOTS) -> None:
     presets = load_presets(src)
     new = computed_blocks(presets)
     new["figures"] = figures_block(presets)
+    full_length_figure()
     PAGE.write_text(fill(PAGE.read_text(), new))
     CLAIMS_CSV.parent.mkdir(parents=True, exist_ok=True)
     CLAIMS_CSV.write_text(an.claims_table(presets).to_csv())

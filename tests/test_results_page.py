@@ -39,7 +39,8 @@ def test_the_page_is_what_the_committed_metrics_give(results):
     presets = results.load_presets()
     page = results.PAGE.read_text()
     blocks = results.blocks(page)
-    assert set(blocks) == {"scale", "figures", "claims", "power", "temperatures", "walls", "reconstructions"}
+    assert set(blocks) == {"scale", "figures", "claims", "power", "temperatures", "walls", "reconstructions",
+                           "full_length"}
     assert blocks["figures"] == results.figures_block(presets, out=None)
     if presets:  # the CSV's full-precision numbers may differ in the last bit on another CPU's NumPy
         _assert_same_csv(results.CLAIMS_CSV.read_text(), an.claims_table(presets).to_csv())
@@ -158,6 +159,89 @@ def test_reconstruction_evidence_policies_and_paired_test_on_planted_numbers(tin
     assert t["diff"] == pytest.approx(d.mean()) and t["n"] == 4
     assert t["p"] == pytest.approx(an.t_pvalue(want_t, 3))
     assert math.isnan(module.paired(np.ones(3), np.ones(3))["p"])  # no spread, no test
+
+
+# ------------------------------------------------------------------- the main job at its full length
+
+
+def _full_length_module():
+    spec = importlib.util.spec_from_file_location("mjx_curio_full_length_evidence",
+                                                  ROOT / "experiments" / "full_length_evidence.py")
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    return module
+
+
+def test_the_committed_full_length_numbers_are_what_their_runs_give(results):
+    # The tests' p-values against SciPy's, from the per-run numbers the file keeps; Holm's
+    # correction recomputed; the verdicts' sweep is the main job's shape.
+    stats = pytest.importorskip("scipy.stats")
+    if not results.FULL_LENGTH.exists():
+        pytest.skip("no full-length sweep measured")
+    e = json.loads(results.FULL_LENGTH.read_text())
+    assert e["steps"] > e["committed"]["steps"] and e["runs"] == e["committed"]["runs"]
+    for rows, test, a, b in (("platforms", stats.ttest_ind, "long", "short"), ("halves", stats.ttest_rel, "second", "first")):
+        ps = []
+        for r in e[rows]:
+            x, y = np.array(r[a], float), np.array(r[b], float)
+            want = test(x, y, equal_var=False) if test is stats.ttest_ind else test(x, y)
+            assert r["p"] == pytest.approx(want.pvalue, rel=1e-6, abs=1e-12), (rows, r["group"], r["measure"])
+            assert r["diff"] == pytest.approx(np.mean(x) - np.mean(y), rel=1e-6, abs=1e-9)
+            ps.append(r["p"])
+        order = np.argsort(ps)
+        m = len(ps)
+        want_holm = np.maximum.accumulate(np.minimum(1.0, (m - np.arange(m)) * np.array(ps)[order]))
+        assert [e[rows][i]["p_holm"] for i in order] == pytest.approx(list(want_holm))
+
+
+def test_holm_on_planted_p_values():
+    module = _full_length_module()
+    # sorted 0.01, 0.02, 0.03, 0.5 of four tests: 0.04, 0.06, 0.06 (kept monotone), 0.5; None is no test
+    assert module.holm([0.03, 0.5, None, 0.01, 0.02]) == pytest.approx([0.06, 0.5, None, 0.04, 0.06])
+    assert module.holm([]) == []
+
+
+def test_full_length_evidence_on_the_tiny_sweep(results, tiny_sweep, tiny_single_sweep, tmp_path, monkeypatch):
+    """The tiny sweep's 200 steps as the long sweep, its first 100 as the committed one: the same
+    runs over the same steps differ by nothing, and the halves' paired test is Student's t on
+    each run's own numbers."""
+    module = _full_length_module()
+    monkeypatch.setattr(module, "LATE_STEPS", 40)
+    monkeypatch.setattr(module, "BIN_STEPS", 40)
+    long = an.load(tiny_sweep)
+    short = an.load(_copy_sweep(tiny_sweep, tmp_path / "first_half", windows_done=long.metrics["curiosity"].shape[1] // 2))
+    assert short.steps_done == long.steps_done // 2
+    e = module.evidence(long, short)
+    measures = 4
+    assert len(e["platforms"]) == len(e["halves"]) == measures * len(long.groups())
+    for r in e["platforms"]:
+        assert r["long"] == r["short"]
+        assert r["diff"] == 0.0 and r["p"] in (None, 1.0)
+    steps = long.steps
+    late = (steps > long.steps_done - 40) & (steps <= long.steps_done)
+    g = long.groups()[0]
+    want = np.nanmean(long.metrics["curiosity"][g.indices][:, late].mean(axis=2), axis=1)
+    assert e["halves"][0]["measure"] == "curiosity" and e["halves"][0]["second"] == pytest.approx(list(want), rel=1e-5)
+    assert e["curves"]["long"]["steps"] == list(range(40, long.steps_done + 1, 40))
+    path = tmp_path / "full_length.json"
+    path.write_text(json.dumps(e))
+    block = results.full_length_block(path)
+    assert block.count("| curiosity |") == 2 * len(long.groups())
+    assert "Holm's correction over the table's" in block and "full_length_curiosity.png" in block
+    with pytest.raises(ValueError, match="other settings"):
+        module.evidence(long, an.load(tiny_single_sweep))
+    with pytest.raises(ValueError, match="no more than"):
+        module.evidence(short, long)
+    assert results.full_length_block(tmp_path / "missing.json").startswith("No sweep of the paper's full length")
+
+
+def test_full_length_evidence_refuses_bad_command_lines(tmp_path, capsys, monkeypatch):
+    module = _full_length_module()
+    monkeypatch.setattr(module, "OUT", tmp_path / "out" / "full_length.json")
+    assert module.main([]) == 2 and "full_length_evidence.py runs/h200/main" in capsys.readouterr().err
+    assert module.main([str(tmp_path / "nowhere")]) == 2
+    assert "full_length_evidence.py:" in capsys.readouterr().err
+    assert not (tmp_path / "out").exists()
 
 
 # ---------------------------------------------------------------------- snapshots of tiny sweeps

@@ -1,0 +1,188 @@
+"""The paper's main job at its full length: 80,000 steps, where the committed two-agent runs stop at 40,000.
+
+    python experiments/full_length_evidence.py runs/h200/main
+
+The main job (`python -m mjx_curio.sweep policies=eps,boltzmann,ucb seeds=8`: two agents, the
+three policies, 8 seeds a policy, the paper's 80,000 steps) takes about a day on a 2-core CPU, so
+the committed two-agent runs (experiments/results/multi_agent*) stop at 40,000 steps. A GPU runs
+the whole job in minutes (docs/cost_model.md). Its metrics, about 25 MB, are not committed; this
+script reduces such a sweep to what the results page shows and writes
+docs/results/full_length.json:
+
+- `claims`: the paper's claims that the two-agent sweep alone can test (`analysis.claims_table`),
+  at the sweep's full length;
+- `platforms`: the sweep against the committed CPU runs over the steps both ran, policy by policy
+  (`analysis.walls_measures`: late curiosity, the VAE loss per image and its reconstruction term
+  over the last 10,000 of those steps, object contacts per 1,000 agent-steps over all of them);
+  Welch's t-test across seeds, then Holm's correction over the table's tests. Another device
+  rounds differently (and may run float32 matrix products on TF32 tensor cores), so no run is
+  reproduced bit for bit; the question is whether the results move beyond seed noise;
+- `halves`: the same measures (object contacts too) over the sweep's last 10,000 steps against the
+  10,000 before the committed runs' end, run by run (a paired t-test): what the second half of the
+  paper's run length changes;
+- `curves`: each run's curiosity (the mean of its agents) in bins of 1,000 steps, for both
+  platforms, from which `results.py page` draws the figure.
+
+It refuses a sweep whose runs were set up differently (`analysis.run_config`, policies, seeds;
+how the runs are looped over may differ) from the committed runs, or that is not longer than them.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import json
+import math
+import pathlib
+import sys
+
+import mjx_curio  # noqa: F401  (XLA flags before JAX initialises)
+
+import numpy as np
+
+ROOT = pathlib.Path(__file__).resolve().parents[1]
+OUT = ROOT / "docs" / "results" / "full_length.json"
+PRESET = "multi_agent"  # the main job's settings: the two-agent preset
+LATE_STEPS = 10_000
+BIN_STEPS = 1_000
+
+
+def holm(p: list) -> list:
+    """Holm's step-down adjusted p-values; None (no test) stays None and is not counted."""
+    idx = sorted((i for i, v in enumerate(p) if v is not None), key=lambda i: p[i])
+    out, running = [None] * len(p), 0.0
+    for rank, i in enumerate(idx):
+        running = max(running, min(1.0, (len(idx) - rank) * p[i]))
+        out[i] = running
+    return out
+
+
+def paired_t(x, y) -> dict:
+    """Mean of x - y over runs with both finite, and the two-sided paired t-test's p."""
+    from mjx_curio import analysis as an
+
+    d = np.asarray(x, float) - np.asarray(y, float)
+    d = d[np.isfinite(d)]
+    out = {"diff": float(d.mean()) if len(d) else None, "n": int(len(d)), "p": None}
+    if len(d) >= 2 and d.std(ddof=1) > 0:
+        out["p"] = an.t_pvalue(float(d.mean() / (d.std(ddof=1) / math.sqrt(len(d)))), len(d) - 1)
+    return out
+
+
+def _num(v) -> float | None:
+    """A number for JSON: None where it is not finite (JSON has no NaN)."""
+    return float(v) if v is not None and math.isfinite(v) else None
+
+
+def _floats(x, digits: int | None = None) -> list:
+    """Per-run numbers for JSON: at full precision, so that a test recomputes the p-values from
+    them exactly; the curves' many numbers rounded to `digits`."""
+    return [_num(float(v) if digits is None else round(float(v), digits)) for v in np.asarray(x, float)]
+
+
+def _same_setup(long, short) -> None:
+    from mjx_curio import analysis as an
+
+    # How the runs are looped over (vmap on a GPU, map on a CPU) is execution, not a setting of the runs.
+    long_cfg, short_cfg = an.run_config(long.manifest), an.run_config(short.manifest)
+    if dataclasses.replace(long_cfg, runs_loop=short_cfg.runs_loop) != short_cfg:
+        raise ValueError(f"{long.path} ran other settings than the committed {PRESET} runs "
+                         f"({short.name}); compare it with runs of its own settings")
+    key = lambda s: sorted((r.policy, r.seed, r.eps, r.temperature, r.ucb_c) for r in s.runs)  # noqa: E731
+    if key(long) != key(short):
+        raise ValueError(f"{long.path} has other runs (policies, seeds) than the committed {PRESET} runs")
+    if long.steps_done <= short.steps_done:
+        raise ValueError(f"{long.path} has {long.steps_done:,} steps done, no more than the committed runs' "
+                         f"{short.steps_done:,}")
+
+
+def _curves(sweep) -> dict:
+    from mjx_curio import analysis as an
+
+    steps, c = an.bin_windows(sweep, sweep.metrics["curiosity"].mean(axis=2), every=BIN_STEPS, reduce="mean")
+    return {"steps": [int(s) for s in steps], "runs": [_floats(r, digits=6) for r in c]}
+
+
+def late_measures(sweep, end: int) -> dict:
+    """`walls_measures` over the sweep's first `end` steps, with object contacts counted over the
+    same last LATE_STEPS as the other measures (not over all `end` steps)."""
+    from mjx_curio import analysis as an
+    from mjx_curio.analysis.walls import walls_measures
+
+    out = walls_measures(sweep, end, LATE_STEPS)
+    late = slice((end - LATE_STEPS) // sweep.metrics_every, end // sweep.metrics_every)
+    steps = sweep.metrics["steps_taken"][:, late].astype(float).sum(axis=1) * sweep.n_agents
+    contacts = an.object_contacts(sweep)[:, late].astype(float).sum(axis=1)
+    out["object_contacts"] = np.where(steps > 0, 1000 * contacts / np.maximum(steps, 1), np.nan)
+    return out
+
+
+def evidence(long, short) -> dict:
+    """The JSON entry (module docstring) for sweep `long` against the committed sweep `short`."""
+    from mjx_curio import analysis as an
+    from mjx_curio.analysis.walls import MEASURES, walls_measures
+
+    _same_setup(long, short)
+    end, full = short.steps_done, long.steps_done
+    at_end = walls_measures(long, end, LATE_STEPS)
+    committed = walls_measures(short, end, LATE_STEPS)
+    first, second = late_measures(long, end), late_measures(long, full)
+    platforms, halves = [], []
+    for g in long.groups():
+        h = next(x for x in short.groups(g.policy) if np.isclose(x.value, g.value))
+        for key, what, _ in MEASURES:
+            t = an.welch_t(at_end[key][g.indices], committed[key][h.indices])
+            platforms.append({"group": g.label, "measure": key, "what": what,
+                              "long": _floats(at_end[key][g.indices]), "short": _floats(committed[key][h.indices]),
+                              "diff": _num(t["diff"]), "p": _num(t["p"])})
+            halves.append({"group": g.label, "measure": key, "what": what,
+                           "first": _floats(first[key][g.indices]), "second": _floats(second[key][g.indices]),
+                           **paired_t(second[key][g.indices], first[key][g.indices])})
+    for rows in (platforms, halves):
+        for row, q in zip(rows, holm([r["p"] for r in rows])):
+            row["p_holm"] = q
+    claims = an.claims_table({PRESET: long})
+    return {
+        "sweep": str(long.path.name), "command": long.manifest.get("command", ""),
+        "device": long.manifest.get("device", {}), "versions": long.manifest.get("versions", {}),
+        "steps": full, "runs": len(long.runs),
+        # a merged sweep's parts may have run on different machines
+        "committed": {"sweep": short.name, "steps": end, "runs": len(short.runs),
+                      "devices": [p.manifest.get("device", {}) for p in (short.parts or [short])]},
+        "late_steps": LATE_STEPS,
+        "claims": [{"claim": r[0], "text": r[1], "statistic": r[3], "verdict": r[4]}
+                   for r in claims.rows if not r[4].startswith("not testable")],
+        "platforms": platforms, "halves": halves,
+        "curves": {"bin_steps": BIN_STEPS, "groups": {g.label: [int(i) for i in g.indices] for g in long.groups()},
+                   "long": _curves(long),
+                   "short": {**_curves(short), "groups": {g.label: [int(i) for i in g.indices]
+                                                          for g in short.groups()}}},
+    }
+
+
+def main(argv: list[str]) -> int:
+    sys.path.insert(0, str(ROOT / "experiments"))
+    import results
+
+    from mjx_curio import analysis as an
+
+    if len(argv) != 1:
+        print(__doc__.splitlines()[2].strip(), file=sys.stderr)
+        return 2
+    try:
+        long = an.load(argv[0])
+        short = results.load_presets().get(PRESET)
+        if short is None:
+            raise ValueError(f"no committed {PRESET} runs in {results.SNAPSHOTS}")
+        entry = evidence(long, short)
+    except (an.SweepError, ValueError) as err:
+        print(f"full_length_evidence.py: {err}", file=sys.stderr)
+        return 2
+    OUT.parent.mkdir(parents=True, exist_ok=True)
+    OUT.write_text(json.dumps(entry, indent=1, allow_nan=False) + "\n")
+    print(f"wrote {OUT}\n")
+    print(results.full_length_block(OUT))
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main(sys.argv[1:]))
