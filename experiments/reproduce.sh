@@ -52,7 +52,9 @@
 # The paper's full scale (8 seeds, 80,000 steps, every preset) is a GPU job: install the CUDA
 # extra (pip install -e '.[cuda]') and run
 #     SEEDS=8 STEPS=80000 bash experiments/reproduce.sh
-# which is the presets' own default scale (python -m mjx_curio.sweep preset=<name>).
+# which is the presets' own default scale (python -m mjx_curio.sweep preset=<name>). On one NVIDIA
+# H200 the two-agent preset at that scale (the main job: 24 runs x 80,000 steps) took 9 minutes;
+# experiments/full_length_evidence.py puts such a sweep beside the committed 40,000-step runs.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 PY=${PYTHON:-.venv/bin/python}
