@@ -45,7 +45,10 @@ def manifest(p, run_cfg, devices, n_pad: int, n_windows: int, background: bool =
         "device": {"platform": devices[0].platform, "kind": devices[0].device_kind, "count": len(devices),
                    "processes": distributed.process_count(), "host": platform.node(), "cpu": cpu_name(),
                    # XLA's codegen options set here move float rounding, so the last bits of a run.
-                   "xla_flags": os.environ.get("XLA_FLAGS", "")},
+                   "xla_flags": os.environ.get("XLA_FLAGS", ""),
+                   # JAX's default precision runs float32 matrix products and convolutions on TF32
+                   # tensor cores on recent NVIDIA GPUs (JAX_DEFAULT_MATMUL_PRECISION=highest: float32).
+                   "matmul_precision": _matmul_precision()},
         "git": git(),
     }
 
@@ -56,6 +59,13 @@ def _plain(x):
     if isinstance(x, (tuple, list)):
         return [_plain(v) for v in x]
     return x
+
+
+def _matmul_precision() -> str:
+    """JAX's default precision for float32 matrix products, as set (or 'default': the backend's)."""
+    import jax
+
+    return str(jax.config.jax_default_matmul_precision or "default")
 
 
 def versions() -> dict:

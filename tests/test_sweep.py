@@ -73,6 +73,7 @@ def test_tiny_sweep_writes_metrics_and_checkpoints_that_load_back(tiny_sweep):
     for key in ("versions", "device", "git", "config"):
         assert manifest[key], key
     assert manifest["versions"]["jax"] and manifest["device"]["platform"] == "cpu"
+    assert manifest["device"]["matmul_precision"] == str(jax.config.jax_default_matmul_precision or "default")
     # Compiled for compile speed, as every program of the session but the users' codegen ones.
     assert all(flag in manifest["device"]["xla_flags"].split() for flag in ADDED_XLA_FLAGS), manifest["device"]
     assert json.loads((tiny_sweep / "progress.json").read_text())["steps_done"] == 200
