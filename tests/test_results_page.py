@@ -228,6 +228,8 @@ def test_full_length_evidence_on_the_tiny_sweep(results, tiny_sweep, tiny_single
     block = results.full_length_block(path)
     assert block.count("| curiosity |") == 2 * len(long.groups())
     assert "Holm's correction over the table's" in block and "full_length_curiosity.png" in block
+    results.full_length_figure(path, out=tmp_path / "figures")  # save_figure refuses a panel with nothing drawn
+    assert (tmp_path / "figures" / "full_length_curiosity.png").is_file()
     with pytest.raises(ValueError, match="other settings"):
         module.evidence(long, an.load(tiny_single_sweep))
     with pytest.raises(ValueError, match="no more than"):
