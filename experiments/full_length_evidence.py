@@ -20,8 +20,9 @@ docs/results/full_length.json:
 - `halves`: the same measures (object contacts too) over the sweep's last 10,000 steps against the
   10,000 before the committed runs' end, run by run (a paired t-test): what the second half of the
   paper's run length changes;
-- `curves`: each run's curiosity (the mean of its agents) in bins of 1,000 steps, for both
-  platforms, from which `results.py page` draws the figure.
+- `curves`: each run's curiosity (the mean of its agents) in bins of 1,000 steps, and its contacts
+  with objects and between the agents summed from the start, for both sets of runs, from which
+  `results.py page` draws the figures.
 
 It refuses a sweep whose runs were set up differently (`analysis.run_config`, policies, seeds;
 how the runs are looped over may differ) from the committed runs, or that is not longer than them.
@@ -96,10 +97,16 @@ def _same_setup(long, short) -> None:
 
 
 def _curves(sweep) -> dict:
+    """Per run, in bins of BIN_STEPS: the curiosity (mean of the agents), and the contact steps
+    with objects and between the agents summed from the start (figs. 21 and 22, not normalised)."""
     from mjx_curio import analysis as an
 
     steps, c = an.bin_windows(sweep, sweep.metrics["curiosity"].mean(axis=2), every=BIN_STEPS, reduce="mean")
-    return {"steps": [int(s) for s in steps], "runs": [_floats(r, digits=6) for r in c]}
+    out = {"steps": [int(s) for s in steps], "runs": [_floats(r, digits=6) for r in c]}
+    for key, counts in (("object_contacts", an.object_contacts(sweep)), ("agent_contacts", an.agent_contacts(sweep))):
+        _, binned = an.bin_windows(sweep, counts, every=BIN_STEPS, reduce="sum")
+        out[key] = [[int(v) for v in np.cumsum(r)] for r in binned]
+    return out
 
 
 def late_measures(sweep, end: int) -> dict:

@@ -316,11 +316,18 @@ def full_length_block(path: pathlib.Path = FULL_LENGTH) -> str:
               f"*Curiosity (the mean of the two agents) in bins of {e['curves']['bin_steps']:,} steps, mean over seeds "
               f"with its 95 % CI: the {e['runs']} runs of {e['steps']:,} steps (solid) and the committed runs of "
               f"{c['steps']:,} (dashed).*"]
+    if "object_contacts" in e["curves"]["long"]:
+        lines += ["", "![full_length_interactions](figures/results/full_length_interactions.png)", "",
+                  "*Contact steps summed from the start, agent-object (left, both agents) and agent-agent (right), "
+                  "mean over seeds with its 95 % CI, per policy: the paper's figs. 21 and 22 at their full length, in "
+                  f"contact steps rather than normalised; the {e['runs']} runs of {e['steps']:,} steps (solid) and the "
+                  f"committed runs of {c['steps']:,} (dashed).*"]
     return "\n".join(lines) + "\n"
 
 
 def full_length_figure(path: pathlib.Path = FULL_LENGTH, out: pathlib.Path = FIGURES) -> None:
-    """docs/figures/results/full_length_curiosity.png from full_length.json: one panel a policy."""
+    """docs/figures/results/full_length_curiosity.png (one panel a policy) and
+    full_length_interactions.png (object and agent contacts) from full_length.json."""
     if not path.exists():
         return
     import matplotlib
@@ -349,6 +356,26 @@ def full_length_figure(path: pathlib.Path = FULL_LENGTH, out: pathlib.Path = FIG
     axes[0][0].set_ylabel("curiosity")
     fig.tight_layout()
     an.save_figure(fig, out, "full_length_curiosity", dpi=DPI)
+    plt.close(fig)
+    if "object_contacts" not in cv["long"]:
+        return
+    fig, axes = plt.subplots(1, 2, figsize=(9.0, 3.4))
+    colours = dict(zip(groups, plt.rcParams["axes.prop_cycle"].by_key()["color"]))
+    for ax, key, title in zip(axes, ("object_contacts", "agent_contacts"), ("agent-object contacts", "agent-agent contacts")):
+        for label in groups:
+            for side, groups_of, style in (("long", cv["groups"], "-"), ("short", cv["short"]["groups"], "--")):
+                curve = cv[side]
+                y = np.asarray([curve[key][i] for i in groups_of[label]], dtype=float)
+                mean, lo, hi, _ = an.mean_ci(y)
+                x = np.asarray(curve["steps"]) / 1000
+                ax.plot(x, mean, style, color=colours[label], lw=1.2, label=label if side == "long" else None)
+                ax.fill_between(x, lo, hi, color=colours[label], alpha=0.15, lw=0)
+        ax.set_title(title, fontsize=9)
+        ax.set_xlabel("agent step (thousands)")
+    axes[0].set_ylabel("contact steps since the start")
+    axes[0].legend(fontsize=7)
+    fig.tight_layout()
+    an.save_figure(fig, out, "full_length_interactions", dpi=DPI)
     plt.close(fig)
 
 

@@ -223,13 +223,16 @@ def test_full_length_evidence_on_the_tiny_sweep(results, tiny_sweep, tiny_single
     want = np.nanmean(long.metrics["curiosity"][g.indices][:, late].mean(axis=2), axis=1)
     assert e["halves"][0]["measure"] == "curiosity" and e["halves"][0]["second"] == pytest.approx(list(want), rel=1e-5)
     assert e["curves"]["long"]["steps"] == list(range(40, long.steps_done + 1, 40))
+    for key, counts in (("object_contacts", an.object_contacts(long)), ("agent_contacts", an.agent_contacts(long))):
+        assert [r[-1] for r in e["curves"]["long"][key]] == counts.sum(axis=1).tolist(), key  # summed from the start
     path = tmp_path / "full_length.json"
     path.write_text(json.dumps(e))
     block = results.full_length_block(path)
     assert block.count("| curiosity |") == 2 * len(long.groups())
     assert "Holm's correction over the table's" in block and "full_length_curiosity.png" in block
     results.full_length_figure(path, out=tmp_path / "figures")  # save_figure refuses a panel with nothing drawn
-    assert (tmp_path / "figures" / "full_length_curiosity.png").is_file()
+    for name in ("full_length_curiosity", "full_length_interactions"):
+        assert (tmp_path / "figures" / f"{name}.png").is_file(), name
     with pytest.raises(ValueError, match="other settings"):
         module.evidence(long, an.load(tiny_single_sweep))
     with pytest.raises(ValueError, match="no more than"):
