@@ -15,8 +15,9 @@ docs/results/full_length.json:
   (`analysis.walls_measures`: late curiosity, the VAE loss per image and its reconstruction term
   over the last 10,000 of those steps, object contacts per 1,000 agent-steps over all of them);
   Welch's t-test across seeds, then Holm's correction over the table's tests. Another device
-  rounds differently (and may run float32 matrix products on TF32 tensor cores), so no run is
-  reproduced bit for bit; the question is whether the results move beyond seed noise;
+  rounds differently (and a recent NVIDIA GPU, at JAX's default precision, runs float32 matrix
+  products and convolutions on TF32 tensor cores), so no run is reproduced bit for bit; the
+  question is whether the results move beyond seed noise;
 - `halves`: the same measures (object contacts too) over the sweep's last 10,000 steps against the
   10,000 before the committed runs' end, run by run (a paired t-test): what the second half of the
   paper's run length changes;
