@@ -1,16 +1,17 @@
-"""The paper's main job at its full length: 80,000 steps, where the committed two-agent runs stop at 40,000.
+"""The paper's experiments at their full length: 80,000 steps, where the committed runs stop at 40,000.
 
-    python experiments/full_length_evidence.py runs/h200/main
+    python experiments/full_length_evidence.py runs/h200/main [runs/h200/single_agent ...]
 
 The main job (`python -m mjx_curio.sweep policies=eps,boltzmann,ucb seeds=8`: two agents, the
 three policies, 8 seeds a policy, the paper's 80,000 steps) takes about a day on a 2-core CPU, so
-the committed two-agent runs (experiments/results/multi_agent*) stop at 40,000 steps. A GPU runs
-the whole job in minutes (docs/cost_model.md). Its metrics, about 25 MB, are not committed; this
-script reduces such a sweep to what the results page shows and writes
-docs/results/full_length.json:
+the committed runs (experiments/results/) stop at 40,000 steps. A GPU runs the whole job in
+minutes (docs/cost_model.md). Such sweeps' metrics, about 25 MB each, are not committed; this
+script reduces them to what the results page shows and writes docs/results/full_length.json. Each
+sweep given stands for the preset whose settings it has (`analysis.assign_presets`: the main job
+is `multi_agent`) and is compared with that preset's committed runs:
 
-- `claims`: the paper's claims that the two-agent sweep alone can test (`analysis.claims_table`),
-  at the sweep's full length;
+- `claims`: the paper's claims that the given sweeps can test (`analysis.claims_table` on them
+  alone), at their full length;
 - `platforms`: the sweep against the committed CPU runs over the steps both ran, policy by policy
   (`analysis.walls_measures`: late curiosity, the VAE loss per image and its reconstruction term
   over the last 10,000 of those steps, object contacts per 1,000 agent-steps over all of them);
@@ -25,7 +26,7 @@ docs/results/full_length.json:
   with objects and between the agents summed from the start, for both sets of runs, from which
   `results.py page` draws the figures.
 
-It refuses a sweep whose runs were set up differently (`analysis.run_config`, policies, seeds;
+Per sweep (`sweeps`), the last three. It refuses a sweep that fits no preset, or whose runs were set up differently (`analysis.run_config`, policies, seeds;
 how the runs are looped over may differ) from the committed runs, or that is not longer than them.
 """
 
@@ -43,7 +44,6 @@ import numpy as np
 
 ROOT = pathlib.Path(__file__).resolve().parents[1]
 OUT = ROOT / "docs" / "results" / "full_length.json"
-PRESET = "multi_agent"  # the main job's settings: the two-agent preset
 LATE_STEPS = 10_000
 BIN_STEPS = 1_000
 
@@ -87,11 +87,11 @@ def _same_setup(long, short) -> None:
     # How the runs are looped over (vmap on a GPU, map on a CPU) is execution, not a setting of the runs.
     long_cfg, short_cfg = an.run_config(long.manifest), an.run_config(short.manifest)
     if dataclasses.replace(long_cfg, runs_loop=short_cfg.runs_loop) != short_cfg:
-        raise ValueError(f"{long.path} ran other settings than the committed {PRESET} runs "
-                         f"({short.name}); compare it with runs of its own settings")
+        raise ValueError(f"{long.path} ran other settings than the committed runs {short.name}; "
+                         "compare it with runs of its own settings")
     key = lambda s: sorted((r.policy, r.seed, r.eps, r.temperature, r.ucb_c) for r in s.runs)  # noqa: E731
     if key(long) != key(short):
-        raise ValueError(f"{long.path} has other runs (policies, seeds) than the committed {PRESET} runs")
+        raise ValueError(f"{long.path} has other runs (policies, seeds) than the committed runs {short.name}")
     if long.steps_done <= short.steps_done:
         raise ValueError(f"{long.path} has {long.steps_done:,} steps done, no more than the committed runs' "
                          f"{short.steps_done:,}")
@@ -124,8 +124,9 @@ def late_measures(sweep, end: int) -> dict:
     return out
 
 
-def evidence(long, short) -> dict:
-    """The JSON entry (module docstring) for sweep `long` against the committed sweep `short`."""
+def sweep_evidence(preset: str, long, short) -> dict:
+    """The JSON entry of one sweep (module docstring): `long` against the committed sweep `short`
+    of the same preset."""
     from mjx_curio import analysis as an
     from mjx_curio.analysis.walls import MEASURES, walls_measures
 
@@ -148,17 +149,14 @@ def evidence(long, short) -> dict:
     for rows in (platforms, halves):
         for row, q in zip(rows, holm([r["p"] for r in rows])):
             row["p_holm"] = q
-    claims = an.claims_table({PRESET: long})
     return {
-        "sweep": str(long.path.name), "command": long.manifest.get("command", ""),
+        "preset": preset, "sweep": str(long.path.name), "command": long.manifest.get("command", ""),
         "device": long.manifest.get("device", {}), "versions": long.manifest.get("versions", {}),
-        "steps": full, "runs": len(long.runs),
+        "steps": full, "runs": len(long.runs), "agents": long.n_agents,
         # a merged sweep's parts may have run on different machines
         "committed": {"sweep": short.name, "steps": end, "runs": len(short.runs),
                       "devices": [p.manifest.get("device", {}) for p in (short.parts or [short])]},
         "late_steps": LATE_STEPS,
-        "claims": [{"claim": r[0], "text": r[1], "statistic": r[3], "verdict": r[4]}
-                   for r in claims.rows if not r[4].startswith("not testable")],
         "platforms": platforms, "halves": halves,
         "curves": {"bin_steps": BIN_STEPS, "groups": {g.label: [int(i) for i in g.indices] for g in long.groups()},
                    "long": _curves(long),
@@ -167,21 +165,36 @@ def evidence(long, short) -> dict:
     }
 
 
+def evidence(longs: dict, committed: dict) -> dict:
+    """{"claims": the claims `longs` ({preset: sweep}) can test, "sweeps": `sweep_evidence` of each
+    against `committed`'s sweep of its preset}."""
+    from mjx_curio import analysis as an
+
+    missing = sorted(set(longs) - set(committed))
+    if missing:
+        raise ValueError(f"no committed runs of {', '.join(missing)} to compare with")
+    claims = an.claims_table(longs)
+    return {"claims": [{"claim": r[0], "text": r[1], "statistic": r[3], "verdict": r[4]}
+                       for r in claims.rows if not r[4].startswith("not testable")],
+            "sweeps": [sweep_evidence(p, longs[p], committed[p]) for p in sorted(longs)]}
+
+
 def main(argv: list[str]) -> int:
     sys.path.insert(0, str(ROOT / "experiments"))
     import results
 
     from mjx_curio import analysis as an
 
-    if len(argv) != 1:
+    if not argv:
         print(__doc__.splitlines()[2].strip(), file=sys.stderr)
         return 2
     try:
-        long = an.load(argv[0])
-        short = results.load_presets().get(PRESET)
-        if short is None:
-            raise ValueError(f"no committed {PRESET} runs in {results.SNAPSHOTS}")
-        entry = evidence(long, short)
+        sweeps = [an.load(a) for a in argv]
+        longs = an.assign_presets(sweeps)
+        lost = [s.name for s in sweeps if not any(s is x or s in getattr(x, "parts", ()) for x in longs.values())]
+        if lost:
+            raise ValueError(f"{', '.join(lost)}: fits no preset, or one another sweep given already stands for")
+        entry = evidence(longs, results.load_presets())
     except (an.SweepError, ValueError) as err:
         print(f"full_length_evidence.py: {err}", file=sys.stderr)
         return 2

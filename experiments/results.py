@@ -17,9 +17,9 @@ sweeps, the figures with their captions, the claims table (`analysis.claims_tabl
 seeds each claim's tests need (`analysis.power_table`), the Boltzmann temperatures measure by
 measure (`analysis.temperature_table`), different walls against identical ones
 (`analysis.walls_table`) and the reconstructions' quality over training (from
-docs/results/reconstructions.json, which `reconstruction_evidence.py` writes) and the main job
-at its full length (from docs/results/full_length.json, which `full_length_evidence.py` writes,
-with its figure); the rest
+docs/results/reconstructions.json, which `reconstruction_evidence.py` writes) and the sweeps
+of the paper's full length (from docs/results/full_length.json, which `full_length_evidence.py`
+writes, with their figures); the rest
 of the page (what the verdicts mean, why a claim may fail here) is prose and stays as written.
 The claims' numbers also go to docs/results/claims.csv, the walls table's to docs/results/walls.csv.
 
@@ -272,20 +272,28 @@ def _p(v) -> str:
 
 def full_length_block(path: pathlib.Path = FULL_LENGTH) -> str:
     """Markdown of full_length.json (`full_length_evidence.py`): the claims at the full run length,
-    the same runs on two platforms, the second half against the first, and the figure."""
+    then per sweep the same runs on two platforms, the second half against the first, and its
+    figures."""
     if not path.exists():
         return "No sweep of the paper's full length has been measured yet (`experiments/full_length_evidence.py`).\n"
     e = json.loads(path.read_text())
+    names = ", ".join(f"`{x['sweep']}` ({x['preset']}, {x['steps']:,} steps)" for x in e["sweeps"])
+    several = len(e["sweeps"]) > 1
+    lines = [f"The claims that the full-length sweep{'s' if several else ''} {names} can test by "
+             f"{'themselves' if several else 'itself'} (the claims table above has them at the committed runs' "
+             "length):", "",
+             "| # | claim | our statistic | verdict |", "|---|---|---|---|"]
+    lines += [f"| {r['claim']} | {r['text']} | {r['statistic']} | {r['verdict']} |" for r in e["claims"]]
+    for x in e["sweeps"]:
+        lines += ["", *_full_length_sweep(x)]
+    return "\n".join(lines) + "\n"
+
+
+def _full_length_sweep(e: dict) -> list[str]:
     c = e["committed"]
     late = e["late_steps"]
     a, b = c["steps"] - late, c["steps"]
     fmt = {"curiosity": ".3g", "vae_loss": ".1f", "recon": ".1f", "object_contacts": ".3g"}
-    lines = [f"`{e['sweep']}`: {e['runs']} runs × {e['steps']:,} steps on {_device(e['device'])}, beside the "
-             f"committed runs `{c['sweep']}` ({c['runs']} runs × {c['steps']:,} steps on {_device(c['devices'])}).", "",
-             f"The claims the two-agent sweep can test alone, at {e['steps']:,} steps (the claims table above has "
-             f"them at {c['steps']:,}):", "",
-             "| # | claim | our statistic | verdict |", "|---|---|---|---|"]
-    lines += [f"| {r['claim']} | {r['text']} | {r['statistic']} | {r['verdict']} |" for r in e["claims"]]
 
     def rows(entries, left, right):
         out = []
@@ -297,37 +305,38 @@ def full_length_block(path: pathlib.Path = FULL_LENGTH) -> str:
         return out
 
     n = sum(r["p"] is not None for r in e["platforms"])
-    lines += ["", f"The same settings and seeds on the two platforms, over the steps both ran: curiosity, the VAE loss "
-              f"per image and its reconstruction term over steps {a:,}-{b:,}, object contacts per 1,000 agent-steps "
-              f"over 0-{b:,}; means over seeds, Welch's two-sided t-test, and Holm's correction over the table's "
-              f"{n} tests:", "",
-              f"| policy | measure | {_device(e['device'])} | {_device(c['devices'])} | difference | p | p (Holm) |",
-              "|---|---|---|---|---|---|---|"]
-    lines += rows(e["platforms"], "long", "short")
     m = sum(r["p"] is not None for r in e["halves"])
-    lines += ["", f"What the second half of the run changes: the same measures, object contacts too, over steps "
-              f"{e['steps'] - late:,}-{e['steps']:,} against {a:,}-{b:,}, run by run; the paired two-sided t-test, "
-              f"Holm over {m} tests:", "",
-              f"| policy | measure | steps {a:,}-{b:,} | steps {e['steps'] - late:,}-{e['steps']:,} | difference | p "
-              "| p (Holm) |",
-              "|---|---|---|---|---|---|---|"]
-    lines += rows(e["halves"], "first", "second")
-    lines += ["", "![full_length_curiosity](figures/results/full_length_curiosity.png)", "",
-              f"*Curiosity (the mean of the two agents) in bins of {e['curves']['bin_steps']:,} steps, mean over seeds "
-              f"with its 95 % CI: the {e['runs']} runs of {e['steps']:,} steps (solid) and the committed runs of "
-              f"{c['steps']:,} (dashed).*"]
-    if "object_contacts" in e["curves"]["long"]:
-        lines += ["", "![full_length_interactions](figures/results/full_length_interactions.png)", "",
-                  "*Contact steps summed from the start, agent-object (left, both agents) and agent-agent (right), "
-                  "mean over seeds with its 95 % CI, per policy: the paper's figs. 21 and 22 at their full length, in "
-                  f"contact steps rather than normalised; the {e['runs']} runs of {e['steps']:,} steps (solid) and the "
-                  f"committed runs of {c['steps']:,} (dashed).*"]
-    return "\n".join(lines) + "\n"
+    name = e["preset"]
+    lines = [f"`{e['sweep']}` ({name}): {e['runs']} runs × {e['steps']:,} steps on {_device(e['device'])}, beside the "
+             f"committed runs `{c['sweep']}` ({c['runs']} runs × {c['steps']:,} steps on {_device(c['devices'])}).", "",
+             f"The same settings and seeds on the two platforms, over the steps both ran: curiosity, the VAE loss "
+             f"per image and its reconstruction term over steps {a:,}-{b:,}, object contacts per 1,000 agent-steps "
+             f"over 0-{b:,}; means over seeds, Welch's two-sided t-test, and Holm's correction over the table's "
+             f"{n} tests:", "",
+             f"| policy | measure | {_device(e['device'])} | {_device(c['devices'])} | difference | p | p (Holm) |",
+             "|---|---|---|---|---|---|---|", *rows(e["platforms"], "long", "short"), "",
+             f"What the second half of the run changes: the same measures, object contacts too, over steps "
+             f"{e['steps'] - late:,}-{e['steps']:,} against {a:,}-{b:,}, run by run; the paired two-sided t-test, "
+             f"Holm over {m} tests:", "",
+             f"| policy | measure | steps {a:,}-{b:,} | steps {e['steps'] - late:,}-{e['steps']:,} | difference | p "
+             "| p (Holm) |", "|---|---|---|---|---|---|---|", *rows(e["halves"], "first", "second"), "",
+             f"![full_length_{name}_curiosity](figures/results/full_length_{name}_curiosity.png)", "",
+             f"*Curiosity (the mean of the agents) in bins of {e['curves']['bin_steps']:,} steps, mean over seeds "
+             f"with its 95 % CI: the {e['runs']} runs of {e['steps']:,} steps (solid) and the committed runs of "
+             f"{c['steps']:,} (dashed).*", "",
+             f"![full_length_{name}_interactions](figures/results/full_length_{name}_interactions.png)", "",
+             "*Contact steps summed from the start, agent-object (both agents)"
+             + (" and agent-agent" if e["agents"] > 1 else "")
+             + ", mean over seeds with its 95 % CI, per policy: the paper's figs. 21 and 22 at their full length, in "
+             f"contact steps rather than normalised; the {e['runs']} runs of {e['steps']:,} steps (solid) and the "
+             f"committed runs of {c['steps']:,} (dashed).*"]
+    return lines
 
 
 def full_length_figure(path: pathlib.Path = FULL_LENGTH, out: pathlib.Path = FIGURES) -> None:
-    """docs/figures/results/full_length_curiosity.png (one panel a policy) and
-    full_length_interactions.png (object and agent contacts) from full_length.json."""
+    """Per sweep of full_length.json, docs/figures/results/full_length_<preset>_curiosity.png (a
+    panel a policy) and full_length_<preset>_interactions.png (object contacts, and agent
+    contacts where there are two agents)."""
     if not path.exists():
         return
     import matplotlib
@@ -337,46 +346,44 @@ def full_length_figure(path: pathlib.Path = FULL_LENGTH, out: pathlib.Path = FIG
 
     from mjx_curio import analysis as an
 
-    e = json.loads(path.read_text())
-    cv = e["curves"]
-    groups = list(cv["groups"])
-    fig, axes = plt.subplots(1, len(groups), figsize=(4.0 * len(groups), 3.2), sharey=True, squeeze=False)
-    for ax, label in zip(axes[0], groups):
-        for side, groups_of, style in (("long", cv["groups"], "-"), ("short", cv["short"]["groups"], "--")):
-            curve = cv[side]
-            x = np.asarray(curve["steps"]) / 1000
-            y = np.asarray([curve["runs"][i] for i in groups_of[label]], dtype=float)
-            mean, lo, hi, _ = an.mean_ci(y)
-            dev = _device(e["device"] if side == "long" else e["committed"]["devices"])
-            line, = ax.plot(x, mean, style, lw=1.2, label=f"{dev}, {len(y)} seeds")
-            ax.fill_between(x, lo, hi, color=line.get_color(), alpha=0.2, lw=0)
-        ax.set_title(label, fontsize=9)
-        ax.set_xlabel("agent step (thousands)")
-        ax.legend(fontsize=7)
-    axes[0][0].set_ylabel("curiosity")
-    fig.tight_layout()
-    an.save_figure(fig, out, "full_length_curiosity", dpi=DPI)
-    plt.close(fig)
-    if "object_contacts" not in cv["long"]:
-        return
-    fig, axes = plt.subplots(1, 2, figsize=(9.0, 3.4))
-    colours = dict(zip(groups, plt.rcParams["axes.prop_cycle"].by_key()["color"]))
-    for ax, key, title in zip(axes, ("object_contacts", "agent_contacts"), ("agent-object contacts", "agent-agent contacts")):
-        for label in groups:
-            for side, groups_of, style in (("long", cv["groups"], "-"), ("short", cv["short"]["groups"], "--")):
-                curve = cv[side]
-                y = np.asarray([curve[key][i] for i in groups_of[label]], dtype=float)
-                mean, lo, hi, _ = an.mean_ci(y)
-                x = np.asarray(curve["steps"]) / 1000
-                ax.plot(x, mean, style, color=colours[label], lw=1.2, label=label if side == "long" else None)
-                ax.fill_between(x, lo, hi, color=colours[label], alpha=0.15, lw=0)
-        ax.set_title(title, fontsize=9)
-        ax.set_xlabel("agent step (thousands)")
-    axes[0].set_ylabel("contact steps since the start")
-    axes[0].legend(fontsize=7)
-    fig.tight_layout()
-    an.save_figure(fig, out, "full_length_interactions", dpi=DPI)
-    plt.close(fig)
+    def band(ax, curve, indices, key, style, colour=None, label=None):
+        y = np.asarray([curve[key][i] for i in indices], dtype=float)
+        mean, lo, hi, _ = an.mean_ci(y)
+        x = np.asarray(curve["steps"]) / 1000
+        line, = ax.plot(x, mean, style, color=colour, lw=1.2, label=label)
+        ax.fill_between(x, lo, hi, color=line.get_color(), alpha=0.2, lw=0)
+
+    for e in json.loads(path.read_text())["sweeps"]:
+        cv = e["curves"]
+        groups = list(cv["groups"])
+        sides = (("long", cv["groups"], "-", _device(e["device"])),
+                 ("short", cv["short"]["groups"], "--", _device(e["committed"]["devices"])))
+        fig, axes = plt.subplots(1, len(groups), figsize=(4.0 * len(groups), 3.2), sharey=True, squeeze=False)
+        for ax, label in zip(axes[0], groups):
+            for side, groups_of, style, dev in sides:
+                band(ax, cv[side], groups_of[label], "runs", style, label=f"{dev}, {len(groups_of[label])} seeds")
+            ax.set_title(label, fontsize=9)
+            ax.set_xlabel("agent step (thousands)")
+            ax.legend(fontsize=7)
+        axes[0][0].set_ylabel("curiosity")
+        fig.tight_layout()
+        an.save_figure(fig, out, f"full_length_{e['preset']}_curiosity", dpi=DPI)
+        plt.close(fig)
+        kinds = [("object_contacts", "agent-object contacts")] + (
+            [("agent_contacts", "agent-agent contacts")] if e["agents"] > 1 else [])
+        fig, axes = plt.subplots(1, len(kinds), figsize=(4.5 * len(kinds), 3.4), squeeze=False)
+        colours = dict(zip(groups, plt.rcParams["axes.prop_cycle"].by_key()["color"]))
+        for ax, (key, title) in zip(axes[0], kinds):
+            for label in groups:
+                for side, groups_of, style, _ in sides:
+                    band(ax, cv[side], groups_of[label], key, style, colours[label], label if side == "long" else None)
+            ax.set_title(title, fontsize=9)
+            ax.set_xlabel("agent step (thousands)")
+        axes[0][0].set_ylabel("contact steps since the start")
+        axes[0][0].legend(fontsize=7)
+        fig.tight_layout()
+        an.save_figure(fig, out, f"full_length_{e['preset']}_interactions", dpi=DPI)
+        plt.close(fig)
 
 
 def claims_block(presets: dict) -> str:

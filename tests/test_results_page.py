@@ -178,7 +178,11 @@ def test_the_committed_full_length_numbers_are_what_their_runs_give(results):
     stats = pytest.importorskip("scipy.stats")
     if not results.FULL_LENGTH.exists():
         pytest.skip("no full-length sweep measured")
-    e = json.loads(results.FULL_LENGTH.read_text())
+    for e in json.loads(results.FULL_LENGTH.read_text())["sweeps"]:
+        _check_full_length_sweep(e, stats)
+
+
+def _check_full_length_sweep(e: dict, stats):
     assert e["steps"] > e["committed"]["steps"] and e["runs"] == e["committed"]["runs"]
     for rows, test, a, b in (("platforms", stats.ttest_ind, "long", "short"), ("halves", stats.ttest_rel, "second", "first")):
         ps = []
@@ -211,7 +215,12 @@ def test_full_length_evidence_on_the_tiny_sweep(results, tiny_sweep, tiny_single
     long = an.load(tiny_sweep)
     short = an.load(_copy_sweep(tiny_sweep, tmp_path / "first_half", windows_done=long.metrics["curiosity"].shape[1] // 2))
     assert short.steps_done == long.steps_done // 2
-    e = module.evidence(long, short)
+    with pytest.raises(ValueError, match="no committed runs of multi_agent"):
+        module.evidence({"multi_agent": long}, {})
+    whole = module.evidence({"multi_agent": long}, {"multi_agent": short})
+    assert [x["preset"] for x in whole["sweeps"]] == ["multi_agent"]
+    e = whole["sweeps"][0]
+    assert e["agents"] == 2 and e["steps"] == long.steps_done and e["committed"]["steps"] == short.steps_done
     measures = 4
     assert len(e["platforms"]) == len(e["halves"]) == measures * len(long.groups())
     for r in e["platforms"]:
@@ -226,26 +235,30 @@ def test_full_length_evidence_on_the_tiny_sweep(results, tiny_sweep, tiny_single
     for key, counts in (("object_contacts", an.object_contacts(long)), ("agent_contacts", an.agent_contacts(long))):
         assert [r[-1] for r in e["curves"]["long"][key]] == counts.sum(axis=1).tolist(), key  # summed from the start
     path = tmp_path / "full_length.json"
-    path.write_text(json.dumps(e))
+    path.write_text(json.dumps(whole))
     block = results.full_length_block(path)
     assert block.count("| curiosity |") == 2 * len(long.groups())
-    assert "Holm's correction over the table's" in block and "full_length_curiosity.png" in block
+    assert "Holm's correction over the table's" in block and "full_length_multi_agent_curiosity.png" in block
     results.full_length_figure(path, out=tmp_path / "figures")  # save_figure refuses a panel with nothing drawn
-    for name in ("full_length_curiosity", "full_length_interactions"):
+    for name in ("full_length_multi_agent_curiosity", "full_length_multi_agent_interactions"):
         assert (tmp_path / "figures" / f"{name}.png").is_file(), name
     with pytest.raises(ValueError, match="other settings"):
-        module.evidence(long, an.load(tiny_single_sweep))
+        module.sweep_evidence("multi_agent", long, an.load(tiny_single_sweep))
     with pytest.raises(ValueError, match="no more than"):
-        module.evidence(short, long)
+        module.sweep_evidence("multi_agent", short, long)
     assert results.full_length_block(tmp_path / "missing.json").startswith("No sweep of the paper's full length")
 
 
-def test_full_length_evidence_refuses_bad_command_lines(tmp_path, capsys, monkeypatch):
+def test_full_length_evidence_refuses_bad_command_lines(tiny_sweep, tmp_path, capsys, monkeypatch):
     module = _full_length_module()
     monkeypatch.setattr(module, "OUT", tmp_path / "out" / "full_length.json")
     assert module.main([]) == 2 and "full_length_evidence.py runs/h200/main" in capsys.readouterr().err
     assert module.main([str(tmp_path / "nowhere")]) == 2
     assert "full_length_evidence.py:" in capsys.readouterr().err
+    # two sweeps of one preset's settings: the second stands for nothing
+    twin = _copy_sweep(tiny_sweep, tmp_path / "twin")
+    assert module.main([str(tiny_sweep), str(twin)]) == 2
+    assert "twin: fits no preset, or one another sweep given already stands for" in capsys.readouterr().err
     assert not (tmp_path / "out").exists()
 
 
