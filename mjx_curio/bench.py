@@ -35,7 +35,8 @@ rendering, encoding, memory, self-models, replay sampling, VAE update, MDN-RNN B
 update, re-encoding), each jitted alone on the real shapes: ms per call and per run-step, XLA's
 FLOPs and bytes, GFLOP/s and % of the machine's peak (a float32 matmul of `peak_n`, measured in
 the same process), next to the whole learner_update and the sweep's own run-step
-(mjx_curio/profile.py; docs/cost_model.md).
+(mjx_curio/profile.py; docs/cost_model.md). With `runs=24 runs_loop=vmap` every part runs over
+the main job's 24 runs batched, as an accelerator runs them.
 
 Every timing is the best of `repeats` blocks after one untimed warm-up call, each block ended
 by block_until_ready. Inputs are random: speed does not depend on the values.
@@ -276,11 +277,10 @@ def bench_sweep(args: dict) -> dict:
                 "peak_rss_mib": _peak_rss_mib(), **_platform()}
     from mjx_curio import config as config_lib
     from mjx_curio import run as run_lib
-    from mjx_curio.plan import RunSpec
     from mjx_curio.program import SweepProgram
 
     devices = jax.devices()
-    loop = args["runs_loop"] if args["runs_loop"] != "auto" else ("map" if devices[0].platform == "cpu" else "vmap")
+    loop = profile_lib.runs_loop(args)
     old = args["fidelity"] == "legacy"
     settings = {"latents": args["latents"], **(config_lib.legacy_settings(LearnerConfig) if old else {})}
     learner = LearnerConfig(image=args["image"], n_agents=args["agents"], batch=args["batch"], seq_len=args["seq_len"],
@@ -288,8 +288,7 @@ def bench_sweep(args: dict) -> dict:
     cfg = run_lib.RunConfig(n_agents=args["agents"], image=args["image"], buffer=args["buffer"],
                             update_every=args["update_every"], metrics_every=args["update_every"], runs_loop=loop,
                             learner=learner, **(config_lib.legacy_settings(run_lib.RunConfig) if old else {}))
-    policies = ("eps", "boltzmann", "ucb")
-    runs = tuple(RunSpec(policies[i % 3], args["seed"] + i // 3, 0.2, 1.5, 1.0) for i in range(args["runs"]))
+    runs = profile_lib.main_job_runs(args["runs"], args["seed"])
     n_pad = host_devices.padding(len(runs), len(devices))
     program = SweepProgram(cfg, runs, n_pad, args["steps"])
     t0 = time.perf_counter()
@@ -406,7 +405,8 @@ BENCHES = {"env": bench_env, "learner": bench_learner, "sweep": bench_sweep, "pr
 
 KEYS = [
     Key("what", "env", "what to time: " + " | ".join(BENCHES), as_choice(tuple(BENCHES))),
-    Key("runs", 24, "env: worlds stepped together (vmapped); sweep: runs", as_int(1)),
+    Key("runs", "auto", "env: worlds stepped together (vmapped); sweep: runs; profile: runs profiled together (each"
+        " part over a runs axis, as runs_loop traverses it); auto: 24 (env, sweep), 1 (profile)", AutoOr(Int(1))),
     Key("agents", 2, "agents per world: 1 | 2", as_int(1, 2)),
     Key("image", 64, "side of each agent's view in pixels (learner: a power of two in [8, 256])", as_int(1)),
     Key("walls", "same", "env: wall variant: " + " | ".join(arena_lib.WALLS), as_choice(arena_lib.WALLS)),
@@ -423,7 +423,7 @@ KEYS = [
     Key("parts", tuple(name for name, _ in profile_lib.COMPONENTS), "profile: components to profile",
         as_choice(tuple(name for name, _ in profile_lib.COMPONENTS)), many=True),
     Key("peak_n", 2048, "profile: side of the float32 matmul that measures the achievable peak", as_int(16)),
-    Key("runs_loop", "auto", "sweep: map | vmap | auto (map on CPU)", as_choice(("auto", "map", "vmap"))),
+    Key("runs_loop", "auto", "sweep, profile: map | vmap | auto (map on CPU)", as_choice(("auto", "map", "vmap"))),
     Key("host_devices", "auto", "sweep: CPU devices the runs are spread over, auto (as the sweep chooses: one per "
         "physical core, at most one per run, padding at most a tenth) or a number; the other benches time one "
         "program on one device", AutoOr(Int(1))),
@@ -485,6 +485,8 @@ def main(argv=None) -> dict | None:
     args = main_guard(argv, PROG, SUMMARY, KEYS)
     if args is None:
         return None
+    if args["runs"] == "auto":  # the main job's 24 runs; the profile's one run, as it always had
+        args["runs"] = 1 if args["what"] == "profile" else 24
     try:
         _validate(args)
         _spread_over_cores(args)

@@ -36,6 +36,14 @@ FLOPs are a lower bound. Bytes accessed are XLA's alone (loop bodies once).
 
 `parts` picks components: physics and run_step compile MJX's step (a minute or more each on a
 2-core CPU); without run_step the other parts start from a freshly reset run.
+
+`runs` > 1 profiles that many runs together, each component over a runs axis the way the sweep
+traverses it (`runs_loop`: vmap batches the runs, as on a GPU; map runs them one by one, as on
+a CPU), each run with its own copy of the inputs and weights; the whole run-step is the sweep's
+program on that many runs (the main job's policies in turn). A call then covers every run, and
+the per-run-step figures divide by the runs: this is where a batched accelerator's time goes
+at the main job's 24 runs, which one run alone would not show (small kernels that a batch of
+24 fills).
 """
 
 from __future__ import annotations
@@ -230,14 +238,55 @@ def matmul_peak(n: int, repeats: int, dtype=jnp.float32) -> float:
 # ------------------------------------------------------------------------------ profile
 
 
-def _configs(args: dict):
+def main_job_runs(n_runs: int, seed: int) -> tuple:
+    """n_runs runs as the main job has them: its three policies in turn, each at its default
+    setting, the seed rising after every three (plan.RunSpec)."""
+    from mjx_curio.plan import RunSpec
+
+    policies = ("eps", "boltzmann", "ucb")
+    return tuple(RunSpec(policies[i % 3], seed + i // 3, 0.2, 1.5, 1.0) for i in range(n_runs))
+
+
+def runs_loop(args: dict) -> str:
+    """The runs loop the profile uses: the key's, or for auto the sweep's choice (map on a CPU,
+    vmap on an accelerator)."""
+    if args["runs_loop"] != "auto":
+        return args["runs_loop"]
+    return "map" if jax.devices()[0].platform == "cpu" else "vmap"
+
+
+def over_runs(fn, n_runs: int, loop: str):
+    """fn over a leading runs axis of each argument, as the sweep's runs loop traverses it;
+    fn itself for one run (no runs axis)."""
+    if n_runs == 1:
+        return fn
+    if loop == "vmap":
+        return jax.vmap(fn)
+    return lambda *xs: jax.lax.map(lambda x: fn(*x), xs)
+
+
+def copies(n_runs: int, *trees) -> tuple:
+    """Each tree with a leading axis of n_runs copies (one run's inputs for every run; a key
+    split into n_runs keys); the trees as they are for one run."""
+    if n_runs == 1:
+        return trees
+
+    def copy(x):
+        if jnp.issubdtype(x.dtype, jax.dtypes.prng_key):
+            return jax.random.split(x, n_runs)
+        return jnp.broadcast_to(x, (n_runs,) + x.shape)
+
+    return tuple(jax.tree.map(copy, t) for t in trees)
+
+
+def _configs(args: dict, loop: str = "map"):
     from mjx_curio import run as run_lib
     from mjx_curio.config import LearnerConfig
 
     lc = LearnerConfig(image=args["image"], n_agents=args["agents"], batch=args["batch"], seq_len=args["seq_len"],
                        latents=args["latents"])
     rc = run_lib.RunConfig(n_agents=args["agents"], image=args["image"], buffer=args["buffer"],
-                           update_every=args["update_every"], metrics_every=args["update_every"], runs_loop="map",
+                           update_every=args["update_every"], metrics_every=args["update_every"], runs_loop=loop,
                            learner=lc)
     return lc, rc
 
@@ -246,11 +295,11 @@ def profile(args: dict, time_fn) -> dict:
     """The per-component profile of one run-step (module docstring); `args` are bench.py's
     keys, `parts` the components to profile (all by default). `time_fn` is bench._time."""
     from mjx_curio import replay as replay_lib
-    from mjx_curio.plan import RunSpec
     from mjx_curio.program import SweepProgram
 
     iters, repeats, ue, parts = args["iters"], args["repeats"], args["update_every"], set(args["parts"])
-    lc, rc = _configs(args)
+    n_runs, loop = args["runs"], runs_loop(args)
+    lc, rc = _configs(args, loop)
     arena = rc.arena
     opt = wm.optimizer(lc)
     n, b, t1 = lc.n_agents, lc.batch, lc.seq_len + 1
@@ -262,9 +311,10 @@ def profile(args: dict, time_fn) -> dict:
     rows: dict = {}
 
     def timed(fn, fn_args, per_step):
-        """(fn's row: time, compile time, counts; fn compiled for fn_args)"""
+        """(the row of fn over the runs: time, compile time, counts; that program compiled for
+        fn_args, which carry the runs axis)"""
         t0, c0 = time.perf_counter(), time.process_time()
-        traced = jax.jit(fn).trace(*fn_args)
+        traced = jax.jit(over_runs(fn, n_runs, loop)).trace(*fn_args)
         compiled = traced.lower().compile()
         compile_s, compile_cpu_s = time.perf_counter() - t0, time.process_time() - c0
         _, best = time_fn(compiled, fn_args, iters, repeats)
@@ -272,13 +322,14 @@ def profile(args: dict, time_fn) -> dict:
                 "compile_cpu_s": round(compile_cpu_s, 2), **counts(compiled, traced.jaxpr.jaxpr)}, compiled
 
     def measure(name, fn, fn_args, per_step):
+        """Time fn on every run, each with its own copy of one run's fn_args."""
         if name in parts:
-            rows[name] = timed(fn, fn_args, per_step)[0]
+            rows[name] = timed(fn, copies(n_runs, *fn_args), per_step)[0]
 
     if "run_step" in parts:
-        # The whole run-step: the sweep's own program on one run, a chunk = one update period.
-        spec = RunSpec("eps", args["seed"], 0.2, 1.5, 1.0)
-        program = SweepProgram(rc, (spec,), -1 % len(jax.devices()), ue)
+        # The whole run-step: the sweep's own program on the runs (the main job's policies in
+        # turn, each at its default), a chunk = one update period.
+        program = SweepProgram(rc, main_job_runs(n_runs, args["seed"]), -n_runs % len(jax.devices()), ue)
         states = jax.block_until_ready(program.init())
         t0, c0 = time.perf_counter(), time.process_time()
         traced = program._chunk.trace(states)  # the sweep's jitted chunk, compiled once, here
@@ -301,8 +352,9 @@ def profile(args: dict, time_fn) -> dict:
         rows["run_step"] = {"ms_per_call": best * 1e3, "calls_per_run_step": 1.0 / ue,
                             "compile_s": round(compile_s, 2), "compile_cpu_s": round(compile_cpu_s, 2),
                             **counts(chunk, traced.jaxpr.jaxpr)}
-        s = jax.tree.map(lambda x: x[0], states)  # the run, after a few real steps
+        s = jax.tree.map(lambda x: x[0], states)  # the first run, after a few real steps
         env, learner, frames, z, carry, buffer = s.env, s.learner, s.frames, s.z, s.carry, s.replay
+        del states, s  # the parts take copies of the first run: free the sweep's buffers first
     else:  # a fresh run's pieces (no MJX step to compile); the nets' inputs random, their speed
         # does not depend on the values
         env = jax.jit(arena.reset)(ks[0]) if parts & {"physics", "rendering"} else None
@@ -356,9 +408,10 @@ def profile(args: dict, time_fn) -> dict:
     if "reencode_layers" in parts:
         # the re-encoding's encoder pass stage by stage, each on the previous stage's output
         x = batch.frames[:, 1:].reshape((-1,) + batch.frames.shape[3:])  # B x T x n_agents frames
+        vae, x = copies(n_runs, learner.vae, x)
         for stage, name in enumerate(encoder_stage_names(lc)):
-            layers[name], stage_fn = timed(partial(encoder_stage, lc, stage), (learner.vae, x), reencode_per_step)
-            x = stage_fn(learner.vae, x)  # the next stage's input, by the program just timed
+            layers[name], stage_fn = timed(partial(encoder_stage, lc, stage), (vae, x), reencode_per_step)
+            x = stage_fn(vae, x)  # the next stage's input, by the program just timed
 
     def mdn_update(p, st, carry0, z, a):  # learner_update's MDN-RNN part (on the stored latents)
         (nll, (mix, h_in)), g = jax.value_and_grad(lambda p: wm.mdn_loss(lc, p, carry0, z, a), has_aux=True)(p)
@@ -393,17 +446,21 @@ def profile(args: dict, time_fn) -> dict:
     names = [name for name, _ in COMPONENTS if name in rows]
     summed = [name for name, when in COMPONENTS if when in ("act", "learn") and name in rows]
     for row in (*rows.values(), *layers.values()):
-        row["ms_per_run_step"] = row["ms_per_call"] * row["calls_per_run_step"]
+        # a call covers every run; a run-step is one step of one run
+        row["runs_per_call"] = n_runs
+        row["ms_per_run_step"] = row["ms_per_call"] * row["calls_per_run_step"] / n_runs
     sum_ms = sum(rows[p]["ms_per_run_step"] for p in summed)
     whole_ms = rows["run_step"]["ms_per_run_step"] if "run_step" in rows else None
     for row in (*rows.values(), *layers.values()):
         row["share_pct"] = 100.0 * row["ms_per_run_step"] / (whole_ms or sum_ms or 1.0)
         row["gflops_per_s"] = row["flops"] / (row["ms_per_call"] * 1e6)
         row["pct_of_peak"] = 100.0 * row["gflops_per_s"] / peak
-        row["flops_per_run_step"] = row["flops"] * row["calls_per_run_step"]
-        row["bytes_per_run_step"] = row["xla_bytes"] * row["calls_per_run_step"]
+        row["flops_per_run_step"] = row["flops"] * row["calls_per_run_step"] / n_runs
+        row["bytes_per_run_step"] = row["xla_bytes"] * row["calls_per_run_step"] / n_runs
     return {
         "what": "profile",
+        "runs": n_runs,
+        "runs_loop": loop,
         "agents": n,
         "image": lc.image,
         "batch": b,
@@ -416,11 +473,14 @@ def profile(args: dict, time_fn) -> dict:
         "iters": iters,
         "repeats": repeats,
         "cpu_model": cpu_model(),
+        "device_kind": jax.devices()[0].device_kind,
+        "matmul_precision": str(jax.config.jax_default_matmul_precision or "default"),
         "peak_matmul_n": args["peak_n"],
         "peak_matmul_gflops": round(peak, 1),
         "peak_matmul_bf16_gflops": round(peak_bf16, 1),
         **theory,
         "run_step_ms": None if whole_ms is None else round(whole_ms, 3),
+        "run_steps_per_s": None if whole_ms is None else round(1e3 / whole_ms, 2),
         "sum_of_parts_ms": round(sum_ms, 3),
         "components": {name: _rounded(rows[name]) for name in names},
         "reencode_layers": {name: _rounded(row) for name, row in layers.items()},
@@ -442,6 +502,20 @@ def encoder_stage(lc, stage: int, vae_params, x):
     """Stage `stage` of the encoder on a batch x (uint8 frames for stage 0, else the stage before's
     output)."""
     return wm.make_nets(lc).vae.apply({"params": vae_params}, stage, x, method=nets.VAE.encode_stage)
+
+
+def peak_note(result: dict) -> str:
+    """What %peak is relative to: the matmul measured now, and on a CPU the theoretical figure."""
+    measured = (f"%peak: of {result['peak_matmul_gflops']} GFLOP/s achievable ({result['peak_matmul_n']}^3 float32"
+                f" matmul at matmul precision {result['matmul_precision']}, best of {max(result['repeats'], 3)},"
+                f" measured now on {result['device_kind']}).")
+    bf16 = f"The same matmul in bfloat16: {result['peak_matmul_bf16_gflops']} GFLOP/s."
+    if result.get("backend", "cpu") != "cpu":
+        # lscpu's figure would be the host's; an accelerator's default precision may be TF32
+        return f"{measured} {bf16} Host CPU: {result['cpu_model']}."
+    return (f"{measured} Theoretical {result['theoretical_gflops']} GFLOP/s = {result['cores']} cores x"
+            f" {result['ghz']} GHz ({result['clock_from']}) x {result['flop_per_cycle']} FLOP/cycle ({result['isa']}):"
+            f" an estimate. {bf16} CPU: {result['cpu_model']}.")
 
 
 def table(result: dict) -> str:
@@ -471,12 +545,17 @@ def table(result: dict) -> str:
     for name, label in (("learner_update", "learner_update (whole)"), ("run_step", "run-step (whole)")):
         if name in comps:
             line(label, comps[name])
+    runs = result["runs"]
+    if result["run_steps_per_s"] is not None:
+        lines.append(f"whole run-step: {result['run_steps_per_s']} run-steps/s over {runs} run(s)")
     lines += [
         "",
-        "calls/step: calls per run-step (a run-step: every agent acts once). Learner parts run once every"
+        "calls/step: calls per run-step (a run-step: every agent of one run acts once). Learner parts run once every"
         " update_every steps; encoding runs every step and once more after each update (run.learn re-encodes the"
         " current view); reencode counts only with latents=reencode. run-step (whole): one call is a chunk of"
         " update_every steps of the sweep's own program.",
+        f"runs: {runs}, runs_loop={result['runs_loop']}: each call covers every run (ms/call, GFLOP/call, MB/call);"
+        f" ms/step = ms/call x calls/step / runs.",
         "share%: of the whole run-step (of the sum of the parts when run_step is not profiled).",
         "Indented under reencode (parts=reencode_layers): the re-encoding's encoder pass, one program per"
         " convolution (with its ReLU; the first also scales the frames) and the head, each on the stage before's"
@@ -484,10 +563,6 @@ def table(result: dict) -> str:
         "GFLOP/call: XLA's cost analysis, plus the matmul/conv FLOPs of the scan iterations it leaves out (it"
         " counts a loop body once): * = corrected so; ~ = also holds a while_loop of unknown trip count (MJX's"
         " solver), counted once: a lower bound. MB/call: XLA's bytes accessed (loop bodies once).",
-        f"%peak: of {result['peak_matmul_gflops']} GFLOP/s achievable ({result['peak_matmul_n']}^3 float32 matmul,"
-        f" best of {max(result['repeats'], 3)}, measured now). Theoretical {result['theoretical_gflops']} GFLOP/s ="
-        f" {result['cores']} cores x {result['ghz']} GHz ({result['clock_from']}) x {result['flop_per_cycle']}"
-        f" FLOP/cycle ({result['isa']}): an estimate. The same matmul in bfloat16:"
-        f" {result['peak_matmul_bf16_gflops']} GFLOP/s. CPU: {result['cpu_model']}.",
+        peak_note(result),
     ]
     return "\n".join(lines)

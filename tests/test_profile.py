@@ -148,3 +148,32 @@ def test_every_learner_component_at_tiny_sizes(capsys):
     assert sum(row["flops"] for row in layers.values()) == pytest.approx(comps["reencode"]["flops"], rel=0.05)
     out = capsys.readouterr().out
     assert "vae_update" in out and "  conv1_7x7x32" in out
+
+
+@pytest.mark.parametrize("loop", ["vmap", "map"])
+def test_several_runs_profile_every_run_and_count_each(loop, capsys):
+    """`runs=2`: each part runs over both runs the way the sweep's runs loop would (vmap batched,
+    as on a GPU; map one by one), so a call does twice one run's work: the re-encoding's FLOPs
+    are twice the hand count of one run's 16 frames, and the per-run-step figures divide by the
+    runs."""
+    result = bench.main(["what=profile", "parts=encoding,reencode,learner_update", "runs=2", f"runs_loop={loop}",
+                         *TINY])
+    assert result["runs"] == 2 and result["runs_loop"] == loop
+    comps = result["components"]
+    lc = LearnerConfig(image=16)
+    # one run's re-encoding: the encoder on B x T x n_agents = 2 x 4 x 2 = 16 frames
+    assert comps["reencode"]["flops"] == pytest.approx(2 * 16 * _encoder_flops(lc), rel=0.05)
+    assert comps["encoding"]["flops"] == pytest.approx(2 * 2 * _encoder_flops(lc), rel=0.1)
+    for row in comps.values():
+        assert row["runs_per_call"] == 2
+        assert row["ms_per_run_step"] == pytest.approx(row["ms_per_call"] * row["calls_per_run_step"] / 2, rel=1e-5)
+        assert row["flops_per_run_step"] == pytest.approx(row["flops"] * row["calls_per_run_step"] / 2, rel=1e-5)
+    assert f"runs: 2, runs_loop={loop}" in capsys.readouterr().out
+
+
+def test_runs_auto_is_one_run_for_the_profile_and_refuses_zero(capsys):
+    assert bench.main(["what=profile", "parts=memory", *TINY])["runs"] == 1
+    with pytest.raises(SystemExit):
+        bench.main(["what=profile", "runs=0"])
+    err = capsys.readouterr().err
+    assert "runs" in err and "auto" in err, err
