@@ -38,6 +38,11 @@ the same process), next to the whole learner_update and the sweep's own run-step
 (mjx_curio/profile.py; docs/cost_model.md). With `runs=24 runs_loop=vmap` every part runs over
 the main job's 24 runs batched, as an accelerator runs them.
 
+what=convs: each encoder convolution with a kernel per run (what vmap makes of per-run weights),
+forward on the re-encoding's frames and backward on the VAE update's, in three forms:
+the package's batched matmuls, XLA's grouped convolution and a taps-summed matmul; ms, FLOPs,
+bytes and each form's deviation from the per-run convolution (mjx_curio/conv_forms.py).
+
 Every timing is the best of `repeats` blocks after one untimed warm-up call, each block ended
 by block_until_ready. Inputs are random: speed does not depend on the values.
 """
@@ -59,6 +64,7 @@ import mujoco
 import optax
 
 from mjx_curio import arena as arena_lib
+from mjx_curio import conv_forms
 from mjx_curio import host_devices
 from mjx_curio import profile as profile_lib
 from mjx_curio import world_model as wm
@@ -66,8 +72,8 @@ from mjx_curio.cli import Key, as_choice, as_int, as_str, main_guard
 from mjx_curio.config import LATENT_MODES, AutoOr, ConfigError, Int, LearnerConfig
 
 PROG = "mjx_curio.bench"
-SUMMARY = ("Throughput figures: what=env (physics + rendering), learner (VAE / learner updates), sweep (whole runs) "
-           "or profile (one run-step by component).")
+SUMMARY = ("Throughput figures: what=env (physics + rendering), learner (VAE / learner updates), sweep (whole runs), "
+           "profile (one run-step by component) or convs (the encoder's convolutions with a kernel per run).")
 
 
 def _time(fn, args, iters: int, repeats: int):
@@ -399,23 +405,31 @@ def bench_profile(args: dict) -> dict:
     return {**profile_lib.profile(args, _time), "peak_rss_mib": _peak_rss_mib(), **_platform()}
 
 
+def bench_convs(args: dict) -> dict:
+    """The encoder's convolutions with a kernel per run, in three forms (mjx_curio/conv_forms.py)."""
+    return {**conv_forms.bench(args, _time), "peak_rss_mib": _peak_rss_mib(), **_platform()}
+
+
 # ---------------------------------------------------------------------------------- main
 
-BENCHES = {"env": bench_env, "learner": bench_learner, "sweep": bench_sweep, "profile": bench_profile}
+BENCHES = {"env": bench_env, "learner": bench_learner, "sweep": bench_sweep, "profile": bench_profile,
+           "convs": bench_convs}
+TABLES = {"profile": profile_lib.table, "convs": conv_forms.table}  # printed as tables, the rest as name: value
 
 KEYS = [
     Key("what", "env", "what to time: " + " | ".join(BENCHES), as_choice(tuple(BENCHES))),
     Key("runs", "auto", "env: worlds stepped together (vmapped); sweep: runs; profile: runs profiled together (each"
-        " part over a runs axis, as runs_loop traverses it); auto: 24 (env, sweep), 1 (profile)", AutoOr(Int(1))),
+        " part over a runs axis, as runs_loop traverses it); convs: runs, each its own kernel; auto: 24 (env, sweep,"
+        " convs), 1 (profile)", AutoOr(Int(1))),
     Key("agents", 2, "agents per world: 1 | 2", as_int(1, 2)),
     Key("image", 64, "side of each agent's view in pixels (learner: a power of two in [8, 256])", as_int(1)),
     Key("walls", "same", "env: wall variant: " + " | ".join(arena_lib.WALLS), as_choice(arena_lib.WALLS)),
     Key("steps", 200, "env, sweep: steps per timed chunk", as_int(1)),
     Key("repeats", 3, "timed blocks; the best is reported", as_int(1)),
-    Key("iters", 5, "learner, profile: calls per timed block", as_int(1)),
+    Key("iters", 5, "learner, profile, convs: calls per timed block", as_int(1)),
     Key("vae_batch", 32, "learner: frames per VAE update", as_int(1)),
-    Key("batch", 16, "learner, sweep, profile: sequences per learner update", as_int(1)),
-    Key("seq_len", 16, "learner, sweep, profile: transitions per sequence", as_int(2)),
+    Key("batch", 16, "learner, sweep, profile, convs: sequences per learner update", as_int(1)),
+    Key("seq_len", 16, "learner, sweep, profile, convs: transitions per sequence", as_int(2)),
     Key("latents", LearnerConfig().latents, "learner, sweep, profile: " + " | ".join(LATENT_MODES)
         + " (sweep with fidelity=legacy: stored, as before the paper-faithful defaults)", as_choice(LATENT_MODES)),
     Key("update_every", 4, "sweep, profile: agent steps between learner updates", as_int(1)),
@@ -453,7 +467,7 @@ def _validate(args: dict) -> None:
         where = args["checkpoint_dir"]
         if where and not (os.path.isdir(where) and os.access(where, os.W_OK | os.X_OK)):
             raise ConfigError(f"checkpoint_dir={where} must be a directory you can write")
-    elif args["what"] == "learner":
+    elif args["what"] in ("learner", "convs"):
         LearnerConfig(image=args["image"], n_agents=args["agents"], batch=args["batch"], seq_len=args["seq_len"], latents=args["latents"])
         LearnerConfig(image=args["image"], n_agents=1, batch=args["vae_batch"])
 
@@ -494,8 +508,8 @@ def main(argv=None) -> dict | None:
         print(f"error: {err}", file=sys.stderr)
         raise SystemExit(2) from None
     result = BENCHES[args["what"]](args)
-    if result["what"] == "profile":
-        print(profile_lib.table(result))
+    if result["what"] in TABLES:
+        print(TABLES[result["what"]](result))
     else:
         print(summary(result))
     if result["what"] == "env" and (args["runs"], args["agents"], args["image"]) == (24, 2, 64):
