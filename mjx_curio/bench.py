@@ -436,7 +436,9 @@ KEYS = [
     Key("buffer", 10_000, "sweep, profile: replay capacity per run", as_int(3)),
     Key("parts", tuple(name for name, _ in profile_lib.COMPONENTS), "profile: components to profile",
         as_choice(tuple(name for name, _ in profile_lib.COMPONENTS)), many=True),
-    Key("peak_n", 2048, "profile: side of the float32 matmul that measures the achievable peak", as_int(16)),
+    Key("peak_n", "auto", "profile: side of the float32 matmul that measures the achievable peak; auto: 2048 on a"
+        " CPU, 8192 on an accelerator (a 2048 matmul takes tens of microseconds there, too short to time)",
+        AutoOr(Int(16))),
     Key("runs_loop", "auto", "sweep, profile: map | vmap | auto (map on CPU)", as_choice(("auto", "map", "vmap"))),
     Key("host_devices", "auto", "sweep: CPU devices the runs are spread over, auto (as the sweep chooses: one per "
         "physical core, at most one per run, padding at most a tenth) or a number; the other benches time one "

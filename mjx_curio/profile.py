@@ -438,10 +438,11 @@ def profile(args: dict, time_fn) -> dict:
                 (learner.self_model, learner.self_opt, batch.latents, mix, h_in, batch.actions), 1.0 / ue)
     measure("learner_update", lambda st, bt, k: wm.learner_update(lc, st, bt, k), (learner, batch, key), 1.0 / ue)
 
-    peak = matmul_peak(args["peak_n"], repeats)
+    peak_n = args["peak_n"] if args["peak_n"] != "auto" else (2048 if jax.devices()[0].platform == "cpu" else 8192)
+    peak = matmul_peak(peak_n, repeats)
     # The same matmul in bfloat16: whether XLA's CPU backend runs it faster than float32 here
     # (native bf16 instructions), which would make bf16 learner arithmetic worth testing.
-    peak_bf16 = matmul_peak(args["peak_n"], repeats, jnp.bfloat16)
+    peak_bf16 = matmul_peak(peak_n, repeats, jnp.bfloat16)
     theory = theoretical_peak()
     names = [name for name, _ in COMPONENTS if name in rows]
     summed = [name for name, when in COMPONENTS if when in ("act", "learn") and name in rows]
@@ -475,7 +476,7 @@ def profile(args: dict, time_fn) -> dict:
         "cpu_model": cpu_model(),
         "device_kind": jax.devices()[0].device_kind,
         "matmul_precision": str(jax.config.jax_default_matmul_precision or "default"),
-        "peak_matmul_n": args["peak_n"],
+        "peak_matmul_n": peak_n,
         "peak_matmul_gflops": round(peak, 1),
         "peak_matmul_bf16_gflops": round(peak_bf16, 1),
         **theory,
