@@ -51,6 +51,11 @@ SCHEMA: dict[str, Metric] = {
                         "self-model's predicted curiosity of the action taken, mean over the window, per agent"),
     "action_counts": Metric("int32", ("agents", "actions"), "steps",
                             "how often each action (manifest 'actions' order) was taken in the window, per agent"),
+    "rotation_reversals": Metric("int32", A, "steps",
+                                 "steps of the window at which the agent turned the other way than at the step before "
+                                 "(rotate_left right after rotate_right, or the reverse), both steps in the window (its "
+                                 "first step never counts), per agent: alternating turns, whose order action_counts "
+                                 "does not keep"),
     "contact_object": Metric("int32", ("agents", "objects"), "steps",
                              "steps of the window in which the agent touched each object (manifest 'objects' order)"),
     "contact_agent": Metric("int32", A, "steps", "steps of the window in which the agent touched the other agent"),
@@ -78,15 +83,20 @@ def fill_value(dtype: str):
 
 
 class MetricsStore:
-    """The `metrics/` directory of a sweep: one preallocated .npy memmap per metric."""
+    """The `metrics/` directory of a sweep: one preallocated .npy memmap per metric. `names`: the
+    metrics it holds, every one of SCHEMA by default; a sweep made before a metric was added
+    goes on without it when resumed (its manifest lists what it records)."""
 
-    def __init__(self, directory: pathlib.Path, n_runs: int, n_windows: int, n_agents: int, create: bool):
+    def __init__(self, directory: pathlib.Path, n_runs: int, n_windows: int, n_agents: int, create: bool,
+                 names=None):
         self.directory = pathlib.Path(directory)
         self.n_runs, self.n_windows, self.n_agents = n_runs, n_windows, n_agents
         self.arrays: dict[str, np.memmap] = {}
         if create:
             self.directory.mkdir(parents=True, exist_ok=False)
         for name, spec in SCHEMA.items():
+            if names is not None and name not in names:
+                continue
             path = self.directory / f"{name}.npy"
             shape = (n_runs, n_windows) + spec.shape(n_agents)
             if create:

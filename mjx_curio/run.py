@@ -214,6 +214,19 @@ def run_chunk(cfg: RunConfig, s: RunState, n_steps: int) -> tuple[RunState, dict
     return s, reduce_windows(cfg, step_m, learn_m)
 
 
+_ROTATIONS = (arena_lib.ACTIONS.index("rotate_left"), arena_lib.ACTIONS.index("rotate_right"))
+
+
+def count_reversals(actions: jax.Array, ran: jax.Array) -> jax.Array:
+    """Per window and agent, the steps at which the agent turned the other way than at the step
+    before, both steps in the window and taken. actions int [T, agents]; ran bool [W, T / W]."""
+    a = actions.reshape(ran.shape + actions.shape[1:])  # [W, w, agents]
+    left, right = _ROTATIONS
+    turned_back = ((a[:, 1:] == left) & (a[:, :-1] == right)) | ((a[:, 1:] == right) & (a[:, :-1] == left))
+    both_ran = (ran[:, 1:] & ran[:, :-1])[..., None]
+    return jnp.sum(turned_back & both_ran, axis=1).astype(jnp.int32)
+
+
 def reduce_windows(cfg: RunConfig, step_m: dict, learn_m: dict) -> dict:
     """Per-step metrics [T, ...] and per-update metrics [T / update_every, ...] -> windows of
     `metrics_every` steps. See metrics.SCHEMA for the meaning of every output."""
@@ -243,6 +256,7 @@ def reduce_windows(cfg: RunConfig, step_m: dict, learn_m: dict) -> dict:
 
     a = step_m["action"]
     out = {
+        "rotation_reversals": count_reversals(a, ran),
         "curiosity": mean_steps(step_m["curiosity"]),
         "curiosity_sample": jnp.where(ran[:, -1][:, None], last(step_m["curiosity"]), jnp.nan),
         "predicted": mean_steps(step_m["predicted"]),

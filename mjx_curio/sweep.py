@@ -164,7 +164,7 @@ def _execute(p: Plan, stop: _StopSignals) -> int:
                   file=sys.stderr)
             return 2
         if lead:
-            store = _resize_metrics(p.out, n_runs, n_windows, v, metrics_lib)
+            store = _resize_metrics(p.out, n_runs, n_windows, v, metrics_lib, names=tuple(saved["metrics"]["schema"]))
             if saved["config"]["steps"] != steps:
                 done = read_progress(p.out).get("steps_done", 0)
                 saved["config"]["steps"] = steps
@@ -289,12 +289,15 @@ def _stopped_message(p: Plan, why: str) -> None:
     print(f"sweep stopped by {why}: {where}.\nresume with:\n  {resume_command(p)}", file=sys.stderr, flush=True)
 
 
-def _resize_metrics(out, n_runs, n_windows, v, metrics_lib):
+def _resize_metrics(out, n_runs, n_windows, v, metrics_lib, names):
     """Open the metrics of a resumed sweep, resized when `steps` changed: grown with empty
     windows, or cut to the new end (only windows not yet run are cut: plan() refuses fewer
-    steps than are done)."""
+    steps than are done). `names`: the metrics the sweep records (its manifest's: a metric
+    added since it began is left out, rather than its earlier windows shown as zeros)."""
     mdir = pathlib.Path(out) / "metrics"
     for name, spec in metrics_lib.SCHEMA.items():
+        if name not in names:
+            continue
         path = mdir / f"{name}.npy"
         old = np.load(path, mmap_mode="r")
         if old.shape[1] != n_windows:
@@ -307,7 +310,7 @@ def _resize_metrics(out, n_runs, n_windows, v, metrics_lib):
             del new, old
             os.replace(tmp, path)
     metrics_lib.write_steps(mdir, n_windows, v["metrics_every"])
-    return metrics_lib.MetricsStore(mdir, n_runs, n_windows, v["agents"], create=False)
+    return metrics_lib.MetricsStore(mdir, n_runs, n_windows, v["agents"], create=False, names=names)
 
 
 if __name__ == "__main__":

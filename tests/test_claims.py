@@ -198,6 +198,12 @@ def test_one_experiments_seeds_from_several_sweeps_merge_into_one():
     b.manifest["metrics"]["schema"] = {"x": {**entry, "dtype": "float16"}}
     with pytest.raises(an.SweepError, match="record different metrics"):
         an.merge_sweeps([a, b])
+    # A metric only one part records (added to the sweeps between them) is left out of the merge.
+    b.manifest["metrics"]["schema"] = {"x": entry, "rotation_reversals": entry}
+    del a.metrics["rotation_reversals"]
+    merged = an.merge_sweeps([a, b])
+    assert "rotation_reversals" not in merged.metrics and set(merged.manifest["metrics"]["schema"]) == {"x"}
+    assert "curiosity" in merged.metrics
     for s in (a, b):
         del s.manifest["metrics"]["schema"]
     d = fake_sweep("again", 2, [("ucb", 1.0)], 5, seeds=1, preset="multi_agent", first_seed=2)
@@ -523,8 +529,30 @@ def test_stop_least_and_trembling_stand_in():
     # Identical seeds have no spread: Welch's t is undefined, so not significant; a little spread fixes that.
     a[b[0], :, 0, 4] += 1
     a[b[1], :, 1, 5] += 1
+    # A sweep that records the order: Boltzmann turns back 4 times a window (of 19 pairs of steps),
+    # the others once; then the other way round.
+    rev = s.metrics["rotation_reversals"]
+    rev[:] = 1
+    rev[b] = 4
+    rev[b[0], :, 0] = 5  # a little spread
+    rate = cl.reversal_rate(s)
+    assert rate[b[1]] == pytest.approx(4 / 19) and rate[s.groups("eps")[0].indices] == pytest.approx(1 / 19)
     r = cl.claim_boltzmann_trembles({"multi_agent": s})
-    assert r.verdict.startswith("not testable: per-step action order is not recorded"), r.verdict
+    assert r.verdict.startswith("holds"), r.verdict
+    assert set(r.tests) == {"reversal rate Boltzmann > ε-greedy", "reversal rate Boltzmann > UCB"}
+    rev[b] = 0
+    rev[b[0], :, 0] = 1
+    r = cl.claim_boltzmann_trembles({"multi_agent": s})
+    assert r.verdict.startswith("does not hold: Boltzmann not significantly above"), r.verdict
+    # Without the order (sweeps made before it was recorded) only an upper bound on alternation is
+    # known, and bounds do not order the policies, whichever way they compare: not testable.
+    del s.metrics["rotation_reversals"]
+    for boltzmann_turns in (5, 1):
+        a[b, :, :, 4:6] = boltzmann_turns
+        a[b[0], :, 0, 4] += 1
+        r = cl.claim_boltzmann_trembles({"multi_agent": s})
+        assert r.verdict.startswith("not testable: the sweep does not record the order"), r.verdict
+        assert "upper bound" in r.statistic and not r.tests
 
 
 def test_prefers_moving_objects_share():

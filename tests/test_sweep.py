@@ -27,6 +27,7 @@ from conftest import ADDED_XLA_FLAGS, CACHE, STOPPED_BY, TINY_SWEEP, sweep_in_pr
 from mjx_curio import analysis as an
 from mjx_curio import checkpoint as ckpt_lib
 from mjx_curio import sweep as sweep_lib
+from mjx_curio.arena import ACTIONS
 from mjx_curio.config import ConfigError
 from mjx_curio.metrics import SCHEMA
 
@@ -84,6 +85,10 @@ def test_tiny_sweep_writes_metrics_and_checkpoints_that_load_back(tiny_sweep):
     assert m["curiosity"].shape == (N_RUNS, 10, 2)
     assert np.isfinite(m["curiosity"]).all() and (m["curiosity"] >= 0).all()
     assert (m["action_counts"].sum(-1) == 20).all()  # every agent acts every step
+    # Turning back can happen at most at the 19 steps of a window after its first, and no more
+    # often than the rarer of the two turns allows; near-random choices do it now and then.
+    rot = m["action_counts"][..., ACTIONS.index("rotate_left") : ACTIONS.index("rotate_right") + 1]
+    assert (m["rotation_reversals"] <= np.minimum(19, 2 * rot.min(-1))).all() and m["rotation_reversals"].sum() > 0
     assert (m["steps_taken"] == 20).all() and (m["non_finite"] == 0).all()
     # Learning starts once replay holds a sequence (17 steps), then every 4 steps.
     assert m["updates"][:, 0].tolist() == [1] * N_RUNS and (m["updates"][:, 1:] == 5).all()

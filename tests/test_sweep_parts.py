@@ -101,7 +101,7 @@ def test_resized_metrics_keep_every_window_run(tmp_path):
     del store
     values = {"metrics_every": 20, "agents": 2}
     for n in (6, 15):
-        store = sweep_lib._resize_metrics(tmp_path, 2, n, values, metrics)
+        store = sweep_lib._resize_metrics(tmp_path, 2, n, values, metrics, names=tuple(metrics.SCHEMA))
         for name, spec in metrics.SCHEMA.items():
             arr = np.load(tmp_path / "metrics" / f"{name}.npy")
             assert arr.shape == (2, n) + spec.shape(2)
@@ -110,6 +110,21 @@ def test_resized_metrics_keep_every_window_run(tmp_path):
             assert (np.isnan(rest) if spec.dtype.startswith("float") else rest == 0).all(), name
         np.testing.assert_array_equal(np.load(tmp_path / "metrics" / "steps.npy"), np.arange(1, n + 1) * 20)
         del store
+
+
+def test_a_sweep_made_before_a_metric_existed_resumes_without_it(tmp_path):
+    """Resumed, a sweep records the metrics its manifest lists: one added to the schema since is
+    neither required on disk nor created with zeros for the windows it never recorded."""
+    older = tuple(name for name in metrics.SCHEMA if name != "rotation_reversals")
+    store = metrics.MetricsStore(tmp_path / "metrics", n_runs=2, n_windows=10, n_agents=2, create=True, names=older)
+    assert set(store.arrays) == set(older)
+    del store
+    store = sweep_lib._resize_metrics(tmp_path, 2, 12, {"metrics_every": 20, "agents": 2}, metrics, names=older)
+    chunk = {name: np.ones((2, 1) + spec.shape(2), spec.dtype) for name, spec in metrics.SCHEMA.items()}
+    store.write(11, chunk)  # the program's chunk has every metric; the store keeps its own
+    store.flush()
+    assert not (tmp_path / "metrics" / "rotation_reversals.npy").exists()
+    assert (np.load(tmp_path / "metrics" / "curiosity.npy")[:, 11] == 1).all()
 
 
 def test_progress_rate_counts_from_the_end_of_the_first_chunk():

@@ -19,6 +19,7 @@ from PIL import Image  # noqa: E402
 
 from mjx_curio import analysis as an  # noqa: E402
 from mjx_curio import video  # noqa: E402
+from mjx_curio.arena import ACTIONS  # noqa: E402
 
 TOP = 32  # top-down view side in the tests
 EGO = 16 * 8  # a 16 px view magnified to about 128 px
@@ -80,6 +81,10 @@ def test_rollout_from_start_is_the_sweep(sweep, tmp_path):
         np.testing.assert_allclose(ro.curiosity[part].mean(axis=0), m["curiosity"][run, w], rtol=1e-5)
         counts = np.stack([np.bincount(ro.actions[part, a], minlength=7) for a in range(2)])
         np.testing.assert_array_equal(counts, m["action_counts"][run, w])
+        # turning the other way than the step before, counted from the actions as they came
+        acts, left, right = ro.actions[part], ACTIONS.index("rotate_left"), ACTIONS.index("rotate_right")
+        back = ((acts[1:] == left) & (acts[:-1] == right)) | ((acts[1:] == right) & (acts[:-1] == left))
+        np.testing.assert_array_equal(back.sum(axis=0), m["rotation_reversals"][run, w])
         np.testing.assert_allclose(ro.pose[20 * w + 19], m["agent_pose"][run, w], atol=1e-5)
 
     path = video.film(ro, tmp_path / "start.gif", fps=10)[0]

@@ -608,15 +608,18 @@ def claim_boltzmann_trembles(presets: Mapping[str, Sweep]) -> ClaimResult:
     """Claim 6b: Boltzmann agents "tremble" (rapid alternating rotations; section 5), where tuned
     ε-greedy and UCB do not.
 
-    The metrics record how often each action was taken per 20-step window, not the order, so
-    alternation itself cannot be seen. Stand-in, per run of multi_agent over the whole run and
-    both agents: the balanced-rotation share = sum over windows of 2 * min(rotate_left,
-    rotate_right) / steps, the most steps of a window that alternating left/right turns could
-    fill. Trembling needs it high; a high value does not prove trembling (the turns may come in
-    two runs of one direction each). Welch t: Boltzmann > ε-greedy and Boltzmann > UCB.
-    Verdict: if both are significant, "not testable" (consistent with trembling, which the counts
-    cannot confirm); otherwise "does not hold" (the counts rule out more alternation than the
-    other policies). Scale: runs of >= 20,000 steps, >= MIN_SEEDS seeds a policy.
+    Measured where the sweep records it (`rotation_reversals`), per run of multi_agent over the
+    whole run and both agents: the reversal rate = steps at which an agent turned the other way
+    than at the step before, over the pairs of consecutive steps inside the 20-step windows (a
+    uniformly random choice of the 7 actions: 2/49 = 0.041). Welch t: Boltzmann > ε-greedy and
+    Boltzmann > UCB; holds if both are significant in that direction.
+
+    Sweeps made before that metric record how often each action was taken per window, not the
+    order. Their balanced-rotation share, 2 * min(rotate_left, rotate_right) / steps summed over
+    windows, is the most steps alternating turns could fill: an upper bound on each policy's
+    alternation, and a comparison of upper bounds cannot order the alternation itself (a policy
+    with the higher bound may alternate less). It is shown, and the verdict is "not testable".
+    Scale: runs of >= 20,000 steps, >= MIN_SEEDS seeds a policy.
     """
     key, claim = "6b", "Boltzmann agents 'tremble' (rapid alternating rotations)"
     evidence = "section 5 (qualitative, from videos)"
@@ -628,35 +631,53 @@ def claim_boltzmann_trembles(presets: Mapping[str, Sweep]) -> ClaimResult:
         return ClaimResult(key, claim, evidence, "n/a", f"not testable: {s.name} lacks Boltzmann or comparison runs")
     if not {"rotate_left", "rotate_right"} <= set(s.actions):
         return ClaimResult(key, claim, evidence, "n/a", f"not testable: {s.name} has no rotate actions")
-    bal = balanced_rotation_share(s)
+    direct = "rotation_reversals" in s.metrics
+    measure, name = (reversal_rate(s), "reversal rate") if direct else (balanced_rotation_share(s), "balanced rotation")
     values, parts, fails = {}, [], []
     for p, g in gs.items():
         if g is not None:
-            m = mean_ci(bal[g.indices])
-            values[f"{p} balanced rotation"] = _num(m[0])
+            m = mean_ci(measure[g.indices])
+            values[f"{p} {name}"] = _num(m[0])
             parts.append(f"{_short(p)} {_ci(m)}")
     tparts, tests = [], {}
     for p in ("eps", "ucb"):
         if gs[p] is None:
             continue
-        tests[f"balanced rotation Boltzmann > {_short(p)}"] = Tested(bal[gs["boltzmann"].indices], bal[gs[p].indices])
-        w = welch_t(bal[gs["boltzmann"].indices], bal[gs[p].indices])
+        w = welch_t(measure[gs["boltzmann"].indices], measure[gs[p].indices])
         values[f"Boltzmann > {p} p"] = _num(w["p"])
         tparts.append(f"Boltzmann > {_short(p)}: t={_f(w['t'])}, p={_p(w['p'])}")
+        if direct:  # a test of the claim itself; the bound's comparison is not one
+            tests[f"reversal rate Boltzmann > {_short(p)}"] = Tested(measure[gs["boltzmann"].indices],
+                                                                     measure[gs[p].indices])
         if not (w["p"] < ALPHA and w["diff"] > 0):
             fails.append(f"Boltzmann not significantly above {_short(p)}")
-    stat = (f"{s.name}: balanced-rotation share 2*min(rotate_left, rotate_right)/steps per 20-step window "
-            f"(an upper bound on alternating turns; action order is not recorded): {', '.join(parts)}; "
-            + "; ".join(tparts))
+    if direct:
+        stat = (f"{s.name}: reversal rate, steps turning the other way than the step before per pair of consecutive "
+                f"steps in a 20-step window (a uniformly random policy: 2/49 = 0.041): {', '.join(parts)}; "
+                + "; ".join(tparts))
+    else:
+        stat = (f"{s.name}: balanced-rotation share 2*min(rotate_left, rotate_right)/steps per 20-step window "
+                f"(an upper bound on alternating turns; this sweep does not record their order): {', '.join(parts)}; "
+                + "; ".join(tparts))
     gap = _scale_gap(s, 20_000, {g.label: g.n for g in gs.values() if g is not None})
     if gap:
         verdict = f"not testable at this scale (needs {gap})"
+    elif not direct:
+        verdict = ("not testable: the sweep does not record the order of actions (rotation_reversals), and upper "
+                   "bounds on alternation cannot order the policies' alternation")
     elif fails:
         verdict = "does not hold: " + "; ".join(fails)
     else:
-        verdict = ("not testable: per-step action order is not recorded; the window counts are consistent with "
-                   "trembling (Boltzmann's balanced-rotation share is significantly higher)")
+        verdict = "holds (Boltzmann's reversal rate significantly above the other policies')"
     return ClaimResult(key, claim, evidence, stat, verdict, values, tests)
+
+
+def reversal_rate(sweep: Sweep) -> np.ndarray:
+    """[runs]: steps at which an agent turned the other way than at the step before, over the
+    pairs of consecutive steps taken inside the windows (agents pooled)."""
+    reversals = sweep.metrics["rotation_reversals"].astype(float).sum(axis=(1, 2))
+    pairs = np.maximum(sweep.metrics["steps_taken"].astype(float) - 1, 0).sum(axis=1) * sweep.n_agents
+    return reversals / np.maximum(pairs, 1)
 
 
 def balanced_rotation_share(sweep: Sweep) -> np.ndarray:

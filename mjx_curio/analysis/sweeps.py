@@ -430,7 +430,8 @@ def merge_sweeps(parts: Sequence[Sweep], differ: Sequence[str] = ()) -> Sweep:
     must agree in every key the results depend on but `seeds` and `first_seed`
     (`plan.result_values`) and may not repeat a run (policy, setting, seed). The runs stand part
     after part, the parts in order of their first seed (as given where it ties); the windows are
-    those every part has finished; `halted` runs keep their mark. The merged sweep holds metrics
+    those every part has finished; `halted` runs keep their mark; the metrics those every part
+    records (a part made before a metric was added lacks it). The merged sweep holds metrics
     only: each part keeps its own checkpoints (`Sweep.parts`), and is named by the seeds it holds
     (`multi_agent.seeds-0-7`). SweepError, naming what differs, where they do not fit.
 
@@ -455,7 +456,8 @@ def merge_sweeps(parts: Sequence[Sweep], differ: Sequence[str] = ()) -> Sweep:
         if diff:
             raise SweepError(f"{s.path} and {first.path} are not seeds of one experiment: they differ in "
                              + "; ".join(f"{k} ({got.get(k)!r} against {want.get(k)!r})" for k in diff))
-        if _arrays(s) != _arrays(first) or s.metrics_every != first.metrics_every:
+        mine, firsts = _arrays(s), _arrays(first)
+        if any(mine[k] != firsts[k] for k in mine.keys() & firsts.keys()) or s.metrics_every != first.metrics_every:
             raise SweepError(f"{s.path} and {first.path} record different metrics")
         for r in s.runs:
             key = (r.policy, r.setting, r.seed)
@@ -480,12 +482,16 @@ def merge_sweeps(parts: Sequence[Sweep], differ: Sequence[str] = ()) -> Sweep:
             config[k] = sorted({x for v in values for x in v})
         else:
             config[k] = list(dict.fromkeys(values))
-    manifest = {**first.manifest, "runs": rows, "metrics": {**first.manifest["metrics"], "windows": windows},
+    common = [k for k in first.metrics if all(k in s.metrics for s in parts)]
+    recorded = {**first.manifest["metrics"], "windows": windows}
+    if "schema" in recorded:
+        recorded["schema"] = {k: v for k, v in recorded["schema"].items() if all(k in _arrays(s) for s in parts)}
+    manifest = {**first.manifest, "runs": rows, "metrics": recorded,
                 "config": config,
                 "parts": [{"path": str(s.path), "command": s.manifest.get("command"), "git": s.manifest.get("git")}
                           for s in parts]}
     progress = {"windows_done": windows, "steps_done": int(steps[-1]) if windows else 0, "halted": halted}
-    metrics = {k: np.concatenate([s.metrics[k][:, :windows] for s in parts]) for k in first.metrics}
+    metrics = {k: np.concatenate([s.metrics[k][:, :windows] for s in parts]) for k in common}
     merged = Sweep(first.path, manifest, progress, steps, metrics)
     # Seeds of one experiment read as one sweep named by its seeds; pieces of a grid by their parts.
     merged.name = (" + ".join(s.name for s in parts) if differ
