@@ -1,4 +1,4 @@
-"""Throughput figures on this machine: `python -m mjx_curio.bench what=env|learner|sweep|profile key=value ...`
+"""Throughput figures on this machine: `python -m mjx_curio.bench what=env|learner|sweep|profile|convs key=value ...`
 
     python -m mjx_curio.bench what=env runs=24 agents=2 image=64
     python -m mjx_curio.bench what=learner
