@@ -164,7 +164,7 @@ def _execute(p: Plan, stop: _StopSignals) -> int:
                   file=sys.stderr)
             return 2
         if lead:
-            store = _resize_metrics(p.out, n_runs, n_windows, v, metrics_lib, names=tuple(saved["metrics"]["schema"]))
+            store = _resize_metrics(p.out, n_runs, n_windows, v, metrics_lib, names=tuple(saved["metrics"].get("schema") or metrics_lib.SCHEMA))
             if saved["config"]["steps"] != steps:
                 done = read_progress(p.out).get("steps_done", 0)
                 saved["config"]["steps"] = steps
