@@ -3,6 +3,7 @@ computations, each claim's verdict on synthetic sweeps with a planted effect (an
 and the whole table on the session's tiny sweeps."""
 
 import dataclasses
+import itertools
 import math
 import pathlib
 
@@ -540,6 +541,15 @@ def test_stop_least_and_trembling_stand_in():
     r = cl.claim_boltzmann_trembles({"multi_agent": s})
     assert r.verdict.startswith("holds"), r.verdict
     assert set(r.tests) == {"reversal rate Boltzmann > ε-greedy", "reversal rate Boltzmann > UCB"}
+    # The context beside it: reversals against a random order of each window's own turns. Boltzmann
+    # (5 and 5 turns in 20 steps: 2.5 reversals expected; 6 and 5 in 21 for one agent of the first
+    # two seeds: 60 / 21) turns back 4 times (5 for the first seed's first agent), the others (3
+    # and 3: 0.9 expected) once.
+    odd = 60 / 21
+    assert r.values["boltzmann reversals / shuffled"] == pytest.approx(
+        np.mean([9 / (odd + 2.5), 8 / (odd + 2.5), 8 / 5]))
+    assert r.values["eps reversals / shuffled"] == pytest.approx(1 / 0.9)
+    assert "random order of each window's own actions" in r.statistic
     rev[b] = 0
     rev[b[0], :, 0] = 1
     r = cl.claim_boltzmann_trembles({"multi_agent": s})
@@ -553,6 +563,39 @@ def test_stop_least_and_trembling_stand_in():
         r = cl.claim_boltzmann_trembles({"multi_agent": s})
         assert r.verdict.startswith("not testable: the sweep does not record the order"), r.verdict
         assert "upper bound" in r.statistic and not r.tests
+
+
+def _reversals(seq, left, right) -> int:
+    return sum({a, b} == {left, right} for a, b in zip(seq[:-1], seq[1:]))
+
+
+def test_reversals_against_shuffled_is_the_mean_over_every_order_of_the_window():
+    # Windows of 6 steps taken (as in a run halted early), so that every order of a window's
+    # actions can be enumerated: the expectation comes from counting, not from the formula.
+    s = fake_sweep("multi_agent", 2, POLICIES, 3, seeds=3)
+    left, right = ACTIONS.index("rotate_left"), ACTIONS.index("rotate_right")
+    rng = np.random.default_rng(3)
+    expected = np.zeros(len(s.runs))
+    for r in range(len(s.runs)):
+        for w in range(3):
+            for agent in range(2):
+                seq = rng.choice(len(ACTIONS), size=6, p=[0.1, 0.1, 0.1, 0.1, 0.25, 0.25, 0.1])
+                s.metrics["action_counts"][r, w, agent] = np.bincount(seq, minlength=len(ACTIONS))
+                s.metrics["rotation_reversals"][r, w, agent] = _reversals(seq, left, right)
+                orders = list(itertools.permutations(seq))
+                expected[r] += np.mean([_reversals(o, left, right) for o in orders])
+    observed = s.metrics["rotation_reversals"].sum(axis=(1, 2))
+    np.testing.assert_allclose(cl.reversals_against_shuffled(s), observed / expected, rtol=1e-12)
+    # Strict alternation (left, right, left, ...) against turns in runs (left, left, left, right, ...).
+    s.metrics["action_counts"][:] = 0
+    s.metrics["action_counts"][..., left] = 3
+    s.metrics["action_counts"][..., right] = 3
+    s.metrics["rotation_reversals"][:] = 5
+    assert cl.reversals_against_shuffled(s) == pytest.approx(5 / 3)  # 2 * 3 * 3 / 6 = 3 expected
+    s.metrics["rotation_reversals"][:] = 1
+    assert cl.reversals_against_shuffled(s) == pytest.approx(1 / 3)
+    s.metrics["action_counts"][..., right] = 0  # no turn back is possible: undefined
+    assert np.isnan(cl.reversals_against_shuffled(s)).all()
 
 
 def test_prefers_moving_objects_share():

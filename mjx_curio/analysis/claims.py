@@ -612,7 +612,9 @@ def claim_boltzmann_trembles(presets: Mapping[str, Sweep]) -> ClaimResult:
     whole run and both agents: the reversal rate = steps at which an agent turned the other way
     than at the step before, over the pairs of consecutive steps inside the 20-step windows (a
     uniformly random choice of the 7 actions: 2/49 = 0.041). Welch t: Boltzmann > ε-greedy and
-    Boltzmann > UCB; holds if both are significant in that direction.
+    Boltzmann > UCB; holds if both are significant in that direction. Beside it, as context: the
+    reversals against a random order of each window's own actions (`reversals_against_shuffled`),
+    which tells a policy that alternates apart from one that merely turns often.
 
     Sweeps made before that metric record how often each action was taken per window, not the
     order. Their balanced-rotation share, 2 * min(rotate_left, rotate_right) / steps summed over
@@ -655,6 +657,7 @@ def claim_boltzmann_trembles(presets: Mapping[str, Sweep]) -> ClaimResult:
         stat = (f"{s.name}: reversal rate, steps turning the other way than the step before per pair of consecutive "
                 f"steps in a 20-step window (a uniformly random policy: 2/49 = 0.041): {', '.join(parts)}; "
                 + "; ".join(tparts))
+        stat += "; " + _order_beyond_counts(s, gs, values)
     else:
         stat = (f"{s.name}: balanced-rotation share 2*min(rotate_left, rotate_right)/steps per 20-step window "
                 f"(an upper bound on alternating turns; this sweep does not record their order): {', '.join(parts)}; "
@@ -672,12 +675,46 @@ def claim_boltzmann_trembles(presets: Mapping[str, Sweep]) -> ClaimResult:
     return ClaimResult(key, claim, evidence, stat, verdict, values, tests)
 
 
+def _order_beyond_counts(s: Sweep, gs: dict, values: dict) -> str:
+    """Claim 6b's context, not its verdict: whether each policy turns back more than the order of
+    its own turns would by chance (`reversals_against_shuffled`), which separates alternating
+    from merely turning often. Adds its figures to `values`; returns its text."""
+    ratio = reversals_against_shuffled(s)
+    parts, tparts = [], []
+    for p, g in gs.items():
+        if g is not None:
+            m = mean_ci(ratio[g.indices])
+            values[f"{p} reversals / shuffled"] = _num(m[0])
+            parts.append(f"{_short(p)} {_ci(m)}")
+    for p in ("eps", "ucb"):
+        if gs[p] is not None:
+            w = welch_t(ratio[gs["boltzmann"].indices], ratio[gs[p].indices])
+            values[f"reversals / shuffled Boltzmann > {p} p"] = _num(w["p"])
+            tparts.append(f"Boltzmann > {_short(p)}: t={_f(w['t'])}, p={_p(w['p'])}")
+    return ("reversals over those a random order of each window's own actions would give (1: turns in no "
+            f"particular order; context, not the verdict): {', '.join(parts)}; " + "; ".join(tparts))
+
+
 def reversal_rate(sweep: Sweep) -> np.ndarray:
     """[runs]: steps at which an agent turned the other way than at the step before, over the
     pairs of consecutive steps taken inside the windows (agents pooled)."""
     reversals = sweep.metrics["rotation_reversals"].astype(float).sum(axis=(1, 2))
     pairs = np.maximum(sweep.metrics["steps_taken"].astype(float) - 1, 0).sum(axis=1) * sweep.n_agents
     return reversals / np.maximum(pairs, 1)
+
+
+def reversals_against_shuffled(sweep: Sweep) -> np.ndarray:
+    """[runs]: the reversals an agent made, over those a random order of each window's own actions
+    would make on average (agents pooled, windows summed): 1 where the turns come in no particular
+    order, above 1 where an agent turns back more often than its turn counts alone explain, below
+    1 where its turns come in runs of one direction. A window of n steps with l left and r right
+    turns has n - 1 pairs of consecutive steps, each of them, in a uniformly random order, a left
+    and a right turn with probability 2 l r / (n (n - 1)): 2 l r / n reversals expected."""
+    a = sweep.metrics["action_counts"].astype(float)  # [R, W, agents, actions]
+    left, right = a[..., sweep.actions.index("rotate_left")], a[..., sweep.actions.index("rotate_right")]
+    expected = (2 * left * right / np.maximum(a.sum(axis=-1), 1)).sum(axis=(1, 2))
+    observed = sweep.metrics["rotation_reversals"].astype(float).sum(axis=(1, 2))
+    return np.where(expected > 0, observed / np.where(expected > 0, expected, 1), np.nan)
 
 
 def balanced_rotation_share(sweep: Sweep) -> np.ndarray:
