@@ -586,6 +586,12 @@ def test_reversals_against_shuffled_is_the_mean_over_every_order_of_the_window()
                 expected[r] += np.mean([_reversals(o, left, right) for o in orders])
     observed = s.metrics["rotation_reversals"].sum(axis=(1, 2))
     np.testing.assert_allclose(cl.reversals_against_shuffled(s), observed / expected, rtol=1e-12)
+    # The same over time, in one bin of the 3 windows, group by group (the figure's numbers).
+    for g in s.groups():
+        steps, rate, ratio = an.reversal_rates(s, g, every=60)
+        assert steps.tolist() == [60]
+        np.testing.assert_allclose(ratio[:, 0], observed[g.indices] / expected[g.indices], rtol=1e-12)
+        np.testing.assert_allclose(rate[:, 0], observed[g.indices] / (3 * 2 * 19))  # 19 pairs a window and agent
     # Strict alternation (left, right, left, ...) against turns in runs (left, left, left, right, ...).
     s.metrics["action_counts"][:] = 0
     s.metrics["action_counts"][..., left] = 3
@@ -596,6 +602,9 @@ def test_reversals_against_shuffled_is_the_mean_over_every_order_of_the_window()
     assert cl.reversals_against_shuffled(s) == pytest.approx(1 / 3)
     s.metrics["action_counts"][..., right] = 0  # no turn back is possible: undefined
     assert np.isnan(cl.reversals_against_shuffled(s)).all()
+    del s.metrics["rotation_reversals"]  # a sweep made before the metric: said so, by name
+    with pytest.raises(an.SweepError, match="rotation_reversals"):
+        an.reversal_rates(s, "eps")
 
 
 def test_prefers_moving_objects_share():

@@ -95,7 +95,7 @@ def test_notebook_runs(tiny_sweeps_dir, tmp_path):
     expected.add("single-fig07-reconstructions-run0")
     for s, groups in slugs.items():
         expected |= {f"{s}-fig11-curiosity-policies", f"{s}-fig21-22-cumulative-interactions", f"{s}-fig10-actions",
-                     f"{s}-losses"}
+                     f"{s}-losses", f"{s}-turn-reversals"}
         for g in groups:
             expected |= {f"{s}-fig08-curiosity-{g}", f"{s}-fig09-interactions-{g}", f"{s}-view-fractions-{g}"}
     assert expected == set(pngs), (sorted(expected - set(pngs)), sorted(set(pngs) - expected))

@@ -29,6 +29,7 @@ Figure) it is given and returning it:
     plot_view_fractions            what each agent looks at over time (objects, other agent)
     plot_observational             curiosity in windows where an agent only watches the other act
     plot_losses                    the world model's training losses
+    plot_turn_reversals            trembling (section 5): turning back over time, against chance
     headline_table                 mean +- sd across seeds per group of the key numbers
     temperature_table              per Boltzmann temperature: curiosity, action entropy, contacts;
                                    each tested across T, blocked by seed
@@ -54,7 +55,7 @@ tables; figures sweeps, stats, recon, action_values and temperatures):
     stats     statistics: `t_quantile_975`, `mean_ci`, `mean_sd`, `moving_average`, `bin_windows`
               and the numbers the figures draw (`per_agent_vae_loss`, `object_contacts`,
               `agent_contacts`, `cells_visited`, `cumulative_interactions`, `interaction_frequency`,
-              `action_totals`, `observation_classes`)
+              `action_totals`, `observation_classes`, `turn_reversals`, `reversal_rates`)
     recon     reconstructions: `reconstructions` (a run's VAE restored from its checkpoints,
               JAX) and the `Reconstructions` it returns; `reconstruction_quality` (every run's VAE
               at every checkpoint on the other runs' replay frames: error and `edge_error`)
@@ -112,6 +113,8 @@ from mjx_curio.analysis.claims import (
     moving_object_shares,
     one_way_anova,
     pearson_r,
+    reversal_rate,
+    reversals_against_shuffled,
     running_action_baseline,
     seed_coupling,
     self_model_tracking,
@@ -140,6 +143,7 @@ from mjx_curio.analysis.figures import (
     plot_single_vs_multi,
     plot_temperature_measures,
     plot_temperatures,
+    plot_turn_reversals,
     plot_vae_single_vs_multi,
     plot_view_fractions,
     save_figure,
@@ -165,10 +169,13 @@ from mjx_curio.analysis.stats import (
     mean_ci,
     mean_sd,
     moving_average,
+    nan_ratio,
     object_contacts,
     observation_classes,
     per_agent_vae_loss,
+    reversal_rates,
     t_quantile_975,
+    turn_reversals,
 )
 from mjx_curio.analysis.sweeps import (
     FORMAT,
@@ -203,8 +210,8 @@ __all__ = [
     "run_config", "run_specs",
     # stats
     "OBS_CLASSES", "action_totals", "agent_contacts", "bin_windows", "cells_visited", "cumulative_interactions",
-    "interaction_frequency", "mean_ci", "mean_sd", "moving_average", "object_contacts", "observation_classes",
-    "per_agent_vae_loss", "t_quantile_975",
+    "interaction_frequency", "mean_ci", "mean_sd", "moving_average", "nan_ratio", "object_contacts",
+    "observation_classes", "per_agent_vae_loss", "reversal_rates", "t_quantile_975", "turn_reversals",
     # recon, action_values
     "ReconstructionQuality", "Reconstructions", "heldout_slots", "reconstruction_quality", "reconstructions",
     "edge_error", "ActionValues", "action_values",
@@ -222,12 +229,13 @@ __all__ = [
     "claim_contact_ranking", "claim_curiosity_dip_and_rise", "claim_observational_curiosity",
     "claim_prefers_moving_objects", "claim_self_model_predicts", "claim_stop_least", "claim_temperatures_alike",
     "claim_two_agents_higher", "claim_results", "claims_table", "curiosity_fall_rise", "f_pvalue", "fisher_z",
-    "late_curiosity", "moving_object_shares", "one_way_anova", "pearson_r", "running_action_baseline", "seed_coupling",
+    "late_curiosity", "moving_object_shares", "one_way_anova", "pearson_r", "reversal_rate",
+    "reversals_against_shuffled", "running_action_baseline", "seed_coupling",
     "self_model_tracking", "t_pvalue", "watching_excess", "welch_t",
     # figures
     "AGENT_COLORS", "CURIOSITY_LABEL", "FIGURES_DIRNAME", "POLICY_COLORS", "STEPS_LABEL", "TARGET_COLORS",
     "empty_axes", "figures_dir", "plot_action_histogram", "plot_boltzmann_greediness", "plot_cumulative_interactions",
     "plot_curiosity", "plot_curiosity_groups", "plot_interaction_frequency", "plot_losses", "plot_observational",
     "plot_reconstructions", "plot_single_vs_multi", "plot_temperature_measures", "plot_temperatures",
-    "plot_vae_single_vs_multi", "plot_view_fractions", "save_figure", "save_text", "slug",
+    "plot_turn_reversals", "plot_vae_single_vs_multi", "plot_view_fractions", "save_figure", "save_text", "slug",
 ]

@@ -48,7 +48,15 @@ from typing import Callable, Mapping, Sequence
 
 import numpy as np
 
-from mjx_curio.analysis.stats import agent_contacts, mean_ci, moving_average, object_contacts, per_agent_vae_loss
+from mjx_curio.analysis.stats import (
+    agent_contacts,
+    mean_ci,
+    moving_average,
+    nan_ratio,
+    object_contacts,
+    per_agent_vae_loss,
+    turn_reversals,
+)
 from mjx_curio.analysis.sweeps import Group, Sweep, load_sweeps, merge_sweeps
 from mjx_curio.analysis.tables import Table
 
@@ -698,23 +706,18 @@ def _order_beyond_counts(s: Sweep, gs: dict, values: dict) -> str:
 def reversal_rate(sweep: Sweep) -> np.ndarray:
     """[runs]: steps at which an agent turned the other way than at the step before, over the
     pairs of consecutive steps taken inside the windows (agents pooled)."""
-    reversals = sweep.metrics["rotation_reversals"].astype(float).sum(axis=(1, 2))
-    pairs = np.maximum(sweep.metrics["steps_taken"].astype(float) - 1, 0).sum(axis=1) * sweep.n_agents
-    return reversals / np.maximum(pairs, 1)
+    t = turn_reversals(sweep)
+    return t["observed"].sum(axis=1) / np.maximum(t["pairs"].sum(axis=1), 1)
 
 
 def reversals_against_shuffled(sweep: Sweep) -> np.ndarray:
-    """[runs]: the reversals an agent made, over those a random order of each window's own actions
-    would make on average (agents pooled, windows summed): 1 where the turns come in no particular
-    order, above 1 where an agent turns back more often than its turn counts alone explain, below
-    1 where its turns come in runs of one direction. A window of n steps with l left and r right
-    turns has n - 1 pairs of consecutive steps, each of them, in a uniformly random order, a left
-    and a right turn with probability 2 l r / (n (n - 1)): 2 l r / n reversals expected."""
-    a = sweep.metrics["action_counts"].astype(float)  # [R, W, agents, actions]
-    left, right = a[..., sweep.actions.index("rotate_left")], a[..., sweep.actions.index("rotate_right")]
-    expected = (2 * left * right / np.maximum(a.sum(axis=-1), 1)).sum(axis=(1, 2))
-    observed = sweep.metrics["rotation_reversals"].astype(float).sum(axis=(1, 2))
-    return np.where(expected > 0, observed / np.where(expected > 0, expected, 1), np.nan)
+    """[runs]: the reversals an agent made over those a random order of each window's own actions
+    would make on average (agents pooled, windows summed; `stats.turn_reversals`): 1 where the
+    turns come in no particular order, above 1 where an agent turns back more often than its turn
+    counts alone explain, below 1 where its turns come in runs of one direction; NaN for a run
+    that never turned both ways in a window."""
+    t = turn_reversals(sweep)
+    return nan_ratio(t["observed"].sum(axis=1), t["shuffled"].sum(axis=1))
 
 
 def balanced_rotation_share(sweep: Sweep) -> np.ndarray:

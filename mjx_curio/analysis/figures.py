@@ -27,6 +27,7 @@ from mjx_curio.analysis.stats import (
     moving_average,
     observation_classes,
     per_agent_vae_loss,
+    reversal_rates,
 )
 from mjx_curio.analysis.sweeps import SWEEP_OUTPUTS, Group, Sweep, SweepError
 from mjx_curio.analysis.temperatures import MEASURES, temperature_measures
@@ -320,6 +321,32 @@ def plot_losses(sweep: Sweep, axes, groups=None, window: int = 50):
             ax.plot(sweep.steps, mean, color=color, linewidth=1.5, label=f"{g.label}, {g.seeds_text}")
             _band(ax, sweep.steps, lo, hi, color, floor=floor)
         _finish(ax, f"{what} loss (moving average of {window} windows)", STEPS_LABEL, ylabel)
+    return axes
+
+
+def plot_turn_reversals(sweep: Sweep, axes, groups=None, every: int = 1000):
+    """Trembling (section 5) over time, per group (mean over seeds, 95% band), in bins of `every`
+    steps: how often an agent turns the other way than at the step before, per pair of
+    consecutive steps (left; dotted: a uniformly random choice of the actions), and that over what
+    a random order of each window's own actions would give (right; 1: turns in no particular
+    order, below 1: turns in runs of one direction). `axes`: 2 Axes. Needs a sweep that records
+    `rotation_reversals`."""
+    gs = _group_list(sweep, groups)
+    colors = _group_colors(gs)
+    for i, g in enumerate(gs):
+        steps, rate, ratio = reversal_rates(sweep, g, every)
+        for ax, v in zip(axes, (rate, ratio)):
+            mean, lo, hi, _ = mean_ci(v)
+            ax.plot(steps, mean, color=colors[i], linewidth=1.5, marker="." if len(steps) < 30 else None,
+                    label=f"{g.label}, {g.seeds_text}")
+            _band(ax, steps, lo, hi, colors[i])
+    n = len(sweep.actions)
+    axes[0].axhline(2 / n**2, color="black", linestyle=":", linewidth=1, label=f"uniformly random ({2}/{n**2})")
+    axes[1].axhline(1, color="black", linestyle=":", linewidth=1, label="turns in a random order")
+    _finish(axes[0], f"Turning back (mean over {every} steps)", STEPS_LABEL,
+            "reversals per pair of consecutive steps\n(both agents)")
+    _finish(axes[1], "Turning back beyond how often the agent turns", STEPS_LABEL,
+            "reversals / reversals in a random order\nof each window's actions")
     return axes
 
 

@@ -3,8 +3,8 @@
 Confidence intervals across seeds (`t_quantile_975`, `mean_ci`, `mean_sd`), smoothing and binning
 over windows (`moving_average`, `bin_windows`), and the quantities the figures draw
 (`per_agent_vae_loss`, `object_contacts`, `agent_contacts`, `cumulative_interactions`,
-`interaction_frequency`, `action_totals`, `observation_classes` with its `OBS_CLASSES`), which the
-tests check. NumPy only; imports `sweeps` and no other module of this package.
+`interaction_frequency`, `action_totals`, `observation_classes` with its `OBS_CLASSES`,
+`turn_reversals`, `reversal_rates`), which the tests check. NumPy only; imports `sweeps` and no other module of this package.
 """
 
 from __future__ import annotations
@@ -180,6 +180,40 @@ def action_totals(sweep: Sweep, group: Any = None) -> np.ndarray:
     run (sums to the steps the run took, per agent)."""
     g = sweep.group(group)
     return sweep.metrics["action_counts"][g.indices].sum(axis=1)
+
+
+def turn_reversals(sweep: Sweep) -> dict[str, np.ndarray]:
+    """Per run and window [runs, windows], both agents summed: `observed`, the steps at which an
+    agent turned the other way than at the step before (`rotation_reversals`, both steps in the
+    window); `pairs`, the pairs of consecutive steps taken in the window, where a reversal can
+    happen; `shuffled`, the reversals a random order of the window's own actions would make on
+    average. A window of n steps with l left and r right turns has n - 1 pairs, each of them, in a
+    uniformly random order, a left and a right turn with probability 2 l r / (n (n - 1)): 2 l r / n
+    reversals expected. Needs a sweep that records `rotation_reversals`."""
+    if "rotation_reversals" not in sweep.metrics:
+        raise SweepError(f"{sweep.name} does not record rotation_reversals (the order of turns): a sweep made "
+                         "before that metric counts each action per window but not their order")
+    a = sweep.metrics["action_counts"].astype(float)  # [R, W, agents, actions]
+    left, right = a[..., sweep.actions.index("rotate_left")], a[..., sweep.actions.index("rotate_right")]
+    return {"observed": sweep.metrics["rotation_reversals"].astype(float).sum(axis=2),
+            "pairs": np.maximum(sweep.metrics["steps_taken"].astype(float) - 1, 0) * sweep.n_agents,
+            "shuffled": (2 * left * right / np.maximum(a.sum(axis=-1), 1)).sum(axis=2)}
+
+
+def nan_ratio(num: np.ndarray, den: np.ndarray) -> np.ndarray:
+    """num / den where den > 0, NaN elsewhere."""
+    return np.where(den > 0, num / np.where(den > 0, den, 1), np.nan)
+
+
+def reversal_rates(sweep: Sweep, group: Any = None, every: int = 1000) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """A group's turning back over time, in bins of `every` agent steps (`bin_windows`): (step at
+    each bin's end [bins], reversals per pair of consecutive steps [runs of the group, bins],
+    reversals over those a random order of each window's actions would make [runs, bins];
+    `turn_reversals`)."""
+    g = sweep.group(group)
+    t = {k: v[g.indices] for k, v in turn_reversals(sweep).items()}
+    steps, b = bin_windows(sweep, np.stack([t["observed"], t["pairs"], t["shuffled"]], axis=-1), every, reduce="sum")
+    return steps, nan_ratio(b[..., 0], b[..., 1]), nan_ratio(b[..., 0], b[..., 2])
 
 
 OBS_CLASSES = ("touches an object or the other agent itself",
