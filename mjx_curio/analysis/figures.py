@@ -341,7 +341,7 @@ def plot_turn_reversals(sweep: Sweep, axes, groups=None, every: int = 1000):
                     label=f"{g.label}, {g.seeds_text}")
             _band(ax, steps, lo, hi, colors[i])
     n = len(sweep.actions)
-    axes[0].axhline(2 / n**2, color="black", linestyle=":", linewidth=1, label=f"uniformly random ({2}/{n**2})")
+    axes[0].axhline(2 / n**2, color="black", linestyle=":", linewidth=1, label=f"uniformly random (2/{n**2})")
     axes[1].axhline(1, color="black", linestyle=":", linewidth=1, label="turns in a random order")
     _finish(axes[0], f"Turning back (mean over {every} steps)", STEPS_LABEL,
             "reversals per pair of consecutive steps\n(both agents)")

@@ -4,7 +4,8 @@ Confidence intervals across seeds (`t_quantile_975`, `mean_ci`, `mean_sd`), smoo
 over windows (`moving_average`, `bin_windows`), and the quantities the figures draw
 (`per_agent_vae_loss`, `object_contacts`, `agent_contacts`, `cumulative_interactions`,
 `interaction_frequency`, `action_totals`, `observation_classes` with its `OBS_CLASSES`,
-`turn_reversals`, `reversal_rates`), which the tests check. NumPy only; imports `sweeps` and no other module of this package.
+`turn_reversals`, `reversal_rates`), which the tests check. NumPy only; imports `sweeps` and no
+other module of this package.
 """
 
 from __future__ import annotations
