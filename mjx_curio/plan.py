@@ -21,6 +21,7 @@ import pathlib
 from mjx_curio import cli
 from mjx_curio import config as config_lib
 from mjx_curio import dirlock
+from mjx_curio import presets as presets_lib
 from mjx_curio.config import POLICY_SETTING, SWEEP_CLASSES, ConfigError, RunConfig, SweepConfig
 
 KEYS = cli.keys_of(*SWEEP_CLASSES)
@@ -169,9 +170,15 @@ def config_of(values: dict) -> dict:
 
 
 def resume_command(p: Plan) -> str:
-    """The command that continues this sweep: every key that differs from its default."""
-    items = [f"{k.name}={k.kind.show(p.values[k.name])}" for k in KEYS
-             if k.name not in ("out", "resume", "preset") and _norm(p.values[k.name]) != _norm(k.default)]
+    """The command that continues this sweep: its preset, if it had one (resume checks it), every
+    key the preset sets (so that its value, not the preset's, is what resumes) and every key that
+    differs from its default."""
+    preset = p.values.get("preset", "none")
+    pinned = set(presets_lib.load_presets().get(preset, {})) if preset != "none" else set()
+    items = [f"preset={preset}"] if preset != "none" else []
+    items += [f"{k.name}={k.kind.show(p.values[k.name])}" for k in KEYS
+              if k.name not in ("out", "resume", "preset")
+              and (k.name in pinned or _norm(p.values[k.name]) != _norm(k.default))]
     return " ".join(["python -m mjx_curio.sweep", *items, f"out={p.out}", "resume=true"])
 
 

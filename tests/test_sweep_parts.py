@@ -14,6 +14,7 @@ import pytest
 
 from mjx_curio import config, dirlock, metrics, plan, progress, provenance
 from mjx_curio.config import ConfigError
+from mjx_curio.presets import apply_preset
 from mjx_curio import sweep as sweep_lib
 
 
@@ -77,6 +78,14 @@ def test_resume_command_names_what_differs_from_the_defaults(tmp_path):
                        f"out={tmp_path / 's'} resume=true")
     # It parses back to the same settings.
     again = sweep_lib.cli.parse(command.split()[3:], sweep_lib.KEYS)
+    assert {k: again[k] for k in values if k != "resume"} == {k: values[k] for k in values if k != "resume"}
+    # A preset's sweep: resume checks the preset, so the command names it; a key the preset sets
+    # but the command line set back to its default is named too, or the preset would win again.
+    argv = ["preset=single_agent", "agents=2", "seeds=3", "steps=20000", f"out={tmp_path / 'p'}"]  # agents=2: the default
+    values = sweep_lib.cli.parse(apply_preset(argv), sweep_lib.KEYS)
+    command = plan.resume_command(plan.plan(values))
+    assert command.split()[3] == "preset=single_agent" and {"agents=2", "seeds=3", "steps=20000"} <= set(command.split())
+    again = sweep_lib.cli.parse(apply_preset(command.split()[3:]), sweep_lib.KEYS)
     assert {k: again[k] for k in values if k != "resume"} == {k: values[k] for k in values if k != "resume"}
 
 
