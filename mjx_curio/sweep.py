@@ -164,7 +164,7 @@ def _execute(p: Plan, stop: _StopSignals) -> int:
                   file=sys.stderr)
             return 2
         if lead:
-            store = _resize_metrics(p.out, n_runs, n_windows, v, metrics_lib, names=tuple(saved["metrics"].get("schema") or metrics_lib.SCHEMA))
+            store = _resize_metrics(p.out, n_runs, n_windows, v, metrics_lib, names=recorded_metrics(saved))
             if saved["config"]["steps"] != steps:
                 done = read_progress(p.out).get("steps_done", 0)
                 saved["config"]["steps"] = steps
@@ -287,6 +287,14 @@ def _stopped_message(p: Plan, why: str) -> None:
     where = (f"its newest complete checkpoint is step {done} of {p.values['steps']} "
              f"({p.out / 'checkpoints' / 'state' / str(done)})") if done else "it has no complete checkpoint yet"
     print(f"sweep stopped by {why}: {where}.\nresume with:\n  {resume_command(p)}", file=sys.stderr, flush=True)
+
+
+def recorded_metrics(manifest: dict) -> tuple:
+    """The metrics a sweep records, as its manifest lists them; a manifest from before the list
+    was kept records every metric of the schema (none had been added since)."""
+    from mjx_curio import metrics as metrics_lib
+
+    return tuple(manifest["metrics"].get("schema") or metrics_lib.SCHEMA)
 
 
 def _resize_metrics(out, n_runs, n_windows, v, metrics_lib, names):

@@ -134,6 +134,9 @@ def test_a_sweep_made_before_a_metric_existed_resumes_without_it(tmp_path):
     store.flush()
     assert not (tmp_path / "metrics" / "rotation_reversals.npy").exists()
     assert (np.load(tmp_path / "metrics" / "curiosity.npy")[:, 11] == 1).all()
+    # Which metrics a resumed sweep records: its manifest's list, or, where it lists none, all.
+    assert sweep_lib.recorded_metrics({"metrics": {"schema": {n: {} for n in older}}}) == older
+    assert sweep_lib.recorded_metrics({"metrics": {"every": 20}}) == tuple(metrics.SCHEMA)
 
 
 def test_progress_rate_counts_from_the_end_of_the_first_chunk():
