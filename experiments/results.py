@@ -9,6 +9,10 @@ presets (`analysis.assign_presets`), what the analysis reads of it (manifest.jso
 and metrics/, about 2 MB for 9 runs of 15,000 steps; not the checkpoints) into
 experiments/results/<preset>/, so the page can be rebuilt, and checked, from the repository
 alone. It never replaces a snapshot with a different sweep or with one that has fewer steps done.
+A sweep in a directory named `<preset>.<label>` is a side experiment of that preset (its own seeds
+and length; `analysis.assign_presets`) and goes to experiments/results/<preset>.<label>/: the
+page's `multi_agent.order` records the order of actions, which claim 6b needs and the
+`multi_agent` sweeps, made before it was recorded, lack.
 
 `page` loads those snapshots, draws the figures with the notebook's own functions
 (`mjx_curio.analysis.plot_*`) into docs/figures/results/, and rewrites the generated blocks of
@@ -548,6 +552,16 @@ def _figures() -> tuple[Figure, ...]:
                "curiosity in such windows minus its own trailing 1,000-step moving average (squared latent distance, "
                "unitless), mean over runs with 95 % confidence intervals. Paper: section 5 (videos only).",
                _one(lambda p, ax: an.plot_observational(p["multi_agent"], ax), size=(8, 3.8))),
+        Figure("multi_agent_turn_reversals", ("multi_agent.order",),
+               "Trembling (claim 6b), two agents, from the side experiment that records the order of actions "
+               "(`multi_agent.order`: the paper's settings, its own seeds and length). Left: how often an agent turns "
+               "the other way than at the step before, per pair of consecutive steps, mean over bins of 1,000 steps "
+               "(dotted: a uniformly random choice of the 7 actions, 2/49). Right: those reversals over the number a "
+               "random order of each 20-step window's own actions would give (1: turns in no particular order; "
+               "below 1: turns in runs of one direction). x: agent steps. Means over {seeds} seeds with 95 % "
+               "confidence bands. Paper: section 5 (videos only).",
+               _one(lambda p, axes: an.plot_turn_reversals(p["multi_agent.order"], axes), size=(12, 3.8),
+                    panels=2)),
         *_temperature_figures("boltzmann_temperatures", "Boltzmann temperatures T = 0.5 to 2.5", "0.5", "2.5",
                               curves="Paper: fig. 19.", actions="Paper: fig. 19 shows only curiosity."),
         *_temperature_figures("boltzmann_low_temperatures",

@@ -565,6 +565,40 @@ def test_stop_least_and_trembling_stand_in():
         assert "upper bound" in r.statistic and not r.tests
 
 
+def test_a_side_experiment_keeps_its_own_key_and_claim_6b_reads_it_for_the_order():
+    # The preset's 8-seed sweep, made before the order of actions was recorded, and a shorter side
+    # experiment of the same preset that records it, with seeds the main sweep also ran: merged,
+    # they would repeat runs (SweepError); as a side experiment it stands apart.
+    main = fake_sweep("multi_agent", 2, POLICIES, 1000, preset="multi_agent")
+    del main.metrics["rotation_reversals"]
+    side = fake_sweep("multi_agent.order", 2, POLICIES, 1000, preset="multi_agent")
+    more = fake_sweep("multi_agent.order.seeds-3-5", 2, POLICIES, 1000, preset="multi_agent", first_seed=3)
+    assert cl.side_experiment("multi_agent.order.seeds-3-5") == "multi_agent.order"
+    assert cl.side_experiment("multi_agent.seeds-3-5") is None and cl.side_experiment("multi_agent") is None
+    assert cl.side_experiment("nothing.order") is None
+    got = cl.assign_presets([side, main])
+    assert list(got) == ["multi_agent", "multi_agent.order"]
+    assert got["multi_agent"] is main and got["multi_agent.order"] is side
+    # Its seed parts merge among themselves, not into the preset.
+    got = cl.assign_presets([main, side, more])
+    assert got["multi_agent"] is main and got["multi_agent.order"].n_runs == 18
+    assert cl.preset_and_sides(got, "multi_agent") == [main, got["multi_agent.order"]]
+    # Claim 6b: the preset's sweep lacks the order, so the side experiment's reversals decide.
+    b = side.groups("boltzmann")[0].indices
+    side.metrics["rotation_reversals"][:] = 1
+    side.metrics["rotation_reversals"][b] = 4
+    side.metrics["rotation_reversals"][b[0], :, 0] = 5
+    r = cl.claim_boltzmann_trembles(cl.assign_presets([main, side]))
+    assert r.statistic.startswith("multi_agent.order: reversal rate"), r.statistic
+    assert r.verdict.startswith("holds"), r.verdict
+    r = cl.claim_boltzmann_trembles(cl.assign_presets([main]))
+    assert r.verdict.startswith("not testable: the sweep does not record the order"), r.verdict
+    # A side experiment named after a preset whose settings it does not have is refused by name.
+    single = fake_sweep("multi_agent.order", 1, POLICIES, 4)
+    with pytest.raises(an.SweepError, match="multi_agent.order: named as a side experiment of multi_agent"):
+        cl.assign_presets([main, single])
+
+
 def _reversals(seq, left, right) -> int:
     return sum({a, b} == {left, right} for a, b in zip(seq[:-1], seq[1:]))
 

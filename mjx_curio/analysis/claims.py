@@ -31,7 +31,10 @@ phenomenon needs, from where the paper sees it (e.g. the curiosity minimum betwe
 
 Sweeps are matched to presets (`assign_presets`) by the `preset` their manifest records, else by
 their directory or dict name, else by their settings (agents, walls, policies, temperatures), so a
-sweep run by hand with a preset's settings stands in for it.
+sweep run by hand with a preset's settings stands in for it. A sweep named `<preset>.<label>`
+(e.g. `multi_agent.order`) is a side experiment of that preset: its own seeds and length, kept
+apart from the preset's sweep, read by the claims that name it (claim 6b reads `multi_agent.*`
+where the `multi_agent` sweep does not record the order of actions).
 
 Tests with p-values use only NumPy and the standard library: Student t and F tails come from the
 regularised incomplete beta function (`betainc`, a continued fraction), checked against closed
@@ -43,6 +46,7 @@ from __future__ import annotations
 import dataclasses
 import math
 import pathlib
+import re
 import warnings
 from typing import Callable, Mapping, Sequence
 
@@ -57,7 +61,7 @@ from mjx_curio.analysis.stats import (
     per_agent_vae_loss,
     turn_reversals,
 )
-from mjx_curio.analysis.sweeps import Group, Sweep, load_sweeps, merge_sweeps
+from mjx_curio.analysis.sweeps import Group, Sweep, SweepError, load_sweeps, merge_sweeps
 from mjx_curio.analysis.tables import Table
 
 ALPHA = 0.05
@@ -242,13 +246,28 @@ def assign_presets(sweeps) -> dict[str, Sweep]:
     all below 0.5). A sweep named after or made by one preset
     serves only that one; the first fitting sweep wins. Several sweeps made by one preset are its
     seeds run in parts (`first_seed=3 seeds=5` after `seeds=3`) and serve it as one
-    (`merge_sweeps`; SweepError, naming what differs, where they are not one experiment)."""
+    (`merge_sweeps`; SweepError, naming what differs, where they are not one experiment).
+
+    A sweep named `<preset>.<label>` (`side_experiment`; its seed parts `<preset>.<label>.seeds-3-5`)
+    is another experiment with that preset's settings, e.g. a shorter sweep that records a metric
+    the preset's sweep lacks: it serves the key `<preset>.<label>`, after the presets, and never
+    the preset itself (SweepError where its settings do not fit the preset's)."""
     if isinstance(sweeps, (str, pathlib.Path)):
         sweeps = load_sweeps(sweeps)
     named = list(sweeps.items()) if isinstance(sweeps, Mapping) else [(s.name, s) for s in sweeps]
     claimed: dict[str, list[Sweep]] = {}
+    sides: dict[str, list[Sweep]] = {}
     fixed = set()
     for name, s in named:
+        side = side_experiment(name)
+        if side is not None:
+            of = side.partition(".")[0]
+            if not _fits(s, PRESET_SETTINGS[of]):
+                raise SweepError(f"{name}: named as a side experiment of {of}, but its settings (agents, walls, "
+                                 "policies) are not that preset's")
+            sides.setdefault(side, []).append(s)
+            fixed.add(id(s))
+            continue
         recorded = s.manifest.get("config", {}).get("preset", "none")
         for key in (recorded, name):
             if key in PRESET_SETTINGS:
@@ -263,7 +282,24 @@ def assign_presets(sweeps) -> dict[str, Sweep]:
             if id(s) not in fixed and _fits(s, want):
                 out[preset] = s
                 break
+    out.update({key: merge_sweeps(parts) for key, parts in sides.items()})
     return out
+
+
+_SEED_PART = re.compile(r"\.seeds-\d+-\d+$")
+
+
+def side_experiment(name: str) -> str | None:
+    """`<preset>.<label>` where `name` is that (or one of its seed parts, `.seeds-3-5` after it),
+    <preset> one of `PRESET_SETTINGS` and <label> not a seed range; else None."""
+    base = _SEED_PART.sub("", name)
+    preset, dot, label = base.partition(".")
+    return base if dot and label and preset in PRESET_SETTINGS else None
+
+
+def preset_and_sides(presets: Mapping[str, Sweep], preset: str) -> list[Sweep]:
+    """The sweep serving `preset`, then its side experiments (`<preset>.<label>`), those given."""
+    return [s for key, s in presets.items() if key == preset or key.startswith(preset + ".")]
 
 
 def _fits(s: Sweep, want: dict) -> bool:
@@ -616,8 +652,10 @@ def claim_boltzmann_trembles(presets: Mapping[str, Sweep]) -> ClaimResult:
     """Claim 6b: Boltzmann agents "tremble" (rapid alternating rotations; section 5), where tuned
     ε-greedy and UCB do not.
 
-    Measured where the sweep records it (`rotation_reversals`), per run of multi_agent over the
-    whole run and both agents: the reversal rate = steps at which an agent turned the other way
+    Measured where a sweep records it (`rotation_reversals`): on multi_agent, or where that sweep
+    does not, on the first of its side experiments that does (`multi_agent.<label>`, e.g.
+    `multi_agent.order`: the same settings, its own seeds and length; `assign_presets`). Per run,
+    over the whole run and both agents: the reversal rate = steps at which an agent turned the other way
     than at the step before, over the pairs of consecutive steps inside the 20-step windows (a
     uniformly random choice of the 7 actions: 2/49 = 0.041). Welch t: Boltzmann > ε-greedy and
     Boltzmann > UCB; holds if both are significant in that direction. Beside it, as context: the
@@ -633,9 +671,10 @@ def claim_boltzmann_trembles(presets: Mapping[str, Sweep]) -> ClaimResult:
     """
     key, claim = "6b", "Boltzmann agents 'tremble' (rapid alternating rotations)"
     evidence = "section 5 (qualitative, from videos)"
-    s = presets.get("multi_agent")
-    if s is None:
+    candidates = preset_and_sides(presets, "multi_agent")
+    if not candidates:
         return ClaimResult(key, claim, evidence, "n/a", _missing(("multi_agent",), presets))
+    s = next((c for c in candidates if "rotation_reversals" in c.metrics), candidates[0])
     gs = {p: _paper_group(s, p) for p in ("boltzmann", "eps", "ucb")}
     if gs["boltzmann"] is None or (gs["eps"] is None and gs["ucb"] is None):
         return ClaimResult(key, claim, evidence, "n/a", f"not testable: {s.name} lacks Boltzmann or comparison runs")
