@@ -583,6 +583,13 @@ def test_a_side_experiment_keeps_its_own_key_and_claim_6b_reads_it_for_the_order
     got = cl.assign_presets([main, side, more])
     assert got["multi_agent"] is main and got["multi_agent.order"].n_runs == 18
     assert cl.preset_and_sides(got, "multi_agent") == [main, got["multi_agent.order"]]
+    # Read as a directory (sorted by name) the side experiment's seeds 3-5 come before the preset's:
+    # each joins its own experiment, whatever the order.
+    main_more = fake_sweep("multi_agent.seeds-3-5", 2, POLICIES, 1000, preset="multi_agent", first_seed=3)
+    for listed in ([main, side, more, main_more], [main_more, more, side, main]):
+        joined = an.join_seed_parts(listed)
+        assert [s.name for s in joined] == ["multi_agent.seeds-0-5", "multi_agent.order.seeds-0-5"]
+        assert joined[0].parts == (main, main_more) and joined[1].parts == (side, more)
     # Claim 6b: the preset's sweep lacks the order, so the side experiment's reversals decide.
     b = side.groups("boltzmann")[0].indices
     side.metrics["rotation_reversals"][:] = 1

@@ -49,7 +49,8 @@ tables; figures sweeps, stats, recon, action_values and temperatures):
 
     sweeps    loading: `load`, `find_sweeps`, `load_sweeps`, `merge_sweeps` (one experiment's seeds
               from several sweeps), `join_seed_parts` (every such experiment of a list merged),
-              `pick_single_multi`; `Sweep`, `Run`, `Group`, `SweepError`; the
+              `pick_single_multi`, `side_experiment` (a `<preset>.<label>` sweep, kept apart from
+              the preset's own); `Sweep`, `Run`, `Group`, `SweepError`; the
               configs a sweep ran with (`learner_config`, `run_config`, `run_specs`) rebuilt from
               its manifest
     stats     statistics: `t_quantile_975`, `mean_ci`, `mean_sd`, `moving_average`, `bin_windows`
@@ -197,6 +198,7 @@ from mjx_curio.analysis.sweeps import (
     pick_single_multi,
     run_config,
     run_specs,
+    side_experiment,
 )
 from mjx_curio.analysis.tables import Table, headline_table
 from mjx_curio.analysis.power import detectable, noncentral_t_sf, power_table, seeds_needed, t_power
@@ -207,7 +209,7 @@ __all__ = [
     # sweeps
     "FORMAT", "POLICY_LABELS", "SETTINGS", "SWEEP_OUTPUTS", "Group", "Run", "Sweep", "SweepError", "drop_diverged",
     "find_sweeps", "join_seed_parts", "learner_config", "load", "load_sweeps", "merge_sweeps", "pick_single_multi",
-    "run_config", "run_specs",
+    "run_config", "run_specs", "side_experiment",
     # stats
     "OBS_CLASSES", "action_totals", "agent_contacts", "bin_windows", "cells_visited", "cumulative_interactions",
     "interaction_frequency", "mean_ci", "mean_sd", "moving_average", "nan_ratio", "object_contacts",

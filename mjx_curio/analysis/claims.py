@@ -46,7 +46,6 @@ from __future__ import annotations
 import dataclasses
 import math
 import pathlib
-import re
 import warnings
 from typing import Callable, Mapping, Sequence
 
@@ -61,7 +60,7 @@ from mjx_curio.analysis.stats import (
     per_agent_vae_loss,
     turn_reversals,
 )
-from mjx_curio.analysis.sweeps import Group, Sweep, SweepError, load_sweeps, merge_sweeps
+from mjx_curio.analysis.sweeps import Group, Sweep, SweepError, load_sweeps, merge_sweeps, side_experiment
 from mjx_curio.analysis.tables import Table
 
 ALPHA = 0.05
@@ -262,7 +261,7 @@ def assign_presets(sweeps) -> dict[str, Sweep]:
         side = side_experiment(name)
         if side is not None:
             of = side.partition(".")[0]
-            if not _fits(s, PRESET_SETTINGS[of]):
+            if of in PRESET_SETTINGS and not _fits(s, PRESET_SETTINGS[of]):
                 raise SweepError(f"{name}: named as a side experiment of {of}, but its settings (agents, walls, "
                                  "policies) are not that preset's")
             sides.setdefault(side, []).append(s)
@@ -284,17 +283,6 @@ def assign_presets(sweeps) -> dict[str, Sweep]:
                 break
     out.update({key: merge_sweeps(parts) for key, parts in sides.items()})
     return out
-
-
-_SEED_PART = re.compile(r"\.seeds-\d+-\d+$")
-
-
-def side_experiment(name: str) -> str | None:
-    """`<preset>.<label>` where `name` is that (or one of its seed parts, `.seeds-3-5` after it),
-    <preset> one of `PRESET_SETTINGS` and <label> not a seed range; else None."""
-    base = _SEED_PART.sub("", name)
-    preset, dot, label = base.partition(".")
-    return base if dot and label and preset in PRESET_SETTINGS else None
 
 
 def preset_and_sides(presets: Mapping[str, Sweep], preset: str) -> list[Sweep]:

@@ -511,8 +511,22 @@ def _seeds_name(name: str, seeds: Sequence[int]) -> str:
             spans[-1][1] = x
         else:
             spans.append([x, x])
-    base = re.sub(r"[.]seeds-[0-9+-]+$", "", name)
-    return f"{base}.seeds-" + "+".join(f"{a}-{b}" if b > a else f"{a}" for a, b in spans)
+    return f"{_SEEDS_SUFFIX.sub('', name)}.seeds-" + "+".join(f"{a}-{b}" if b > a else f"{a}" for a, b in spans)
+
+
+_SEEDS_SUFFIX = re.compile(r"[.]seeds-[0-9+-]+$")
+
+
+def side_experiment(name: str) -> str | None:
+    """`<preset>.<label>` where `name` is that, or one of its seed parts (`.seeds-3-5` after it),
+    with <preset> a preset of presets.toml and <label> not a seed range: another experiment with
+    that preset's settings (e.g. `multi_agent.order`), kept apart from the preset's own sweeps
+    (`join_seed_parts`, `analysis.assign_presets`). None for any other name."""
+    from mjx_curio.presets import load_presets
+
+    base = _SEEDS_SUFFIX.sub("", name)
+    preset, dot, label = base.partition(".")
+    return base if dot and label and preset in load_presets() else None
 
 
 def _arrays(s: Sweep) -> dict:
@@ -528,12 +542,13 @@ def join_seed_parts(sweeps: Sequence[Sweep]) -> list[Sweep]:
     more in a directory of their own) become one `merge_sweeps` Sweep, named after its first part
     with the seeds it holds (`multi_agent.seeds-0-7`), where the first of them stood in `sweeps`.
     A sweep that repeats a run (policy, setting, seed) of parts with lower first seeds stays
-    apart: it is a rerun, not more seeds. A merged sweep reads its checkpoints from its `parts`."""
+    apart: it is a rerun, not more seeds; so does a side experiment (`side_experiment`), which
+    joins only its own seed parts. A merged sweep reads its checkpoints from its `parts`."""
     from mjx_curio.plan import result_values
 
     def settings(s: Sweep) -> str:
         values = {k: v for k, v in result_values(s.manifest).items() if k not in ("seeds", "first_seed")}
-        return json.dumps([values, _arrays(s), s.metrics_every], sort_keys=True, default=str)
+        return json.dumps([values, _arrays(s), s.metrics_every, side_experiment(s.name)], sort_keys=True, default=str)
 
     def runs(s: Sweep) -> set:
         return {(r.policy, r.setting, r.seed) for r in s.runs}
