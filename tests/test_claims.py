@@ -527,6 +527,9 @@ def test_stop_least_and_trembling_stand_in():
     assert r.verdict.startswith("holds"), r.verdict
     bal = cl.balanced_rotation_share(s)
     assert bal[b] == pytest.approx(np.full(3, 10 / 20)) and bal[s.groups("eps")[0].indices] == pytest.approx(6 / 20)
+    # Rotating often, the claim's other reading: 10 of 20 steps for Boltzmann, 6 of 20 for the others.
+    rot = cl.rotation_share(s)
+    assert rot[b] == pytest.approx(10 / 20) and rot[s.groups("ucb")[0].indices] == pytest.approx(6 / 20)
     # Identical seeds have no spread: Welch's t is undefined, so not significant; a little spread fixes that.
     a[b[0], :, 0, 4] += 1
     a[b[1], :, 1, 5] += 1
@@ -550,6 +553,9 @@ def test_stop_least_and_trembling_stand_in():
         np.mean([9 / (odd + 2.5), 8 / (odd + 2.5), 8 / 5]))
     assert r.values["eps reversals / shuffled"] == pytest.approx(1 / 0.9)
     assert "random order of each window's own actions" in r.statistic
+    # Boltzmann rotates on 10 or 11 of 20-21 steps a window, the others on 6 of 20.
+    assert r.values["eps rotation share"] == pytest.approx(6 / 20)
+    assert r.values["rotation share Boltzmann > ucb p"] < 0.05 and "rotating often" in r.statistic
     rev[b] = 0
     rev[b[0], :, 0] = 1
     r = cl.claim_boltzmann_trembles({"multi_agent": s})

@@ -648,7 +648,8 @@ def claim_boltzmann_trembles(presets: Mapping[str, Sweep]) -> ClaimResult:
     uniformly random choice of the 7 actions: 2/49 = 0.041). Welch t: Boltzmann > ε-greedy and
     Boltzmann > UCB; holds if both are significant in that direction. Beside it, as context: the
     reversals against a random order of each window's own actions (`reversals_against_shuffled`),
-    which tells a policy that alternates apart from one that merely turns often.
+    which tells a policy that alternates apart from one that merely turns often; and the paper's
+    words read the other way, rotating often (`rotation_share`, on the preset's own sweep).
 
     Sweeps made before that metric record how often each action was taken per window, not the
     order. Their balanced-rotation share, 2 * min(rotate_left, rotate_right) / steps summed over
@@ -697,6 +698,7 @@ def claim_boltzmann_trembles(presets: Mapping[str, Sweep]) -> ClaimResult:
         stat = (f"{s.name}: balanced-rotation share 2*min(rotate_left, rotate_right)/steps per 20-step window "
                 f"(an upper bound on alternating turns; this sweep does not record their order): {', '.join(parts)}; "
                 + "; ".join(tparts))
+    stat += "; " + _rotating_often(candidates[0], values)
     gap = _scale_gap(s, 20_000, {g.label: g.n for g in gs.values() if g is not None})
     if gap:
         verdict = f"not testable at this scale (needs {gap})"
@@ -730,6 +732,42 @@ def _order_beyond_counts(s: Sweep, gs: dict, values: dict) -> str:
             f"particular order; context, not the verdict): {', '.join(parts)}; " + "; ".join(tparts))
 
 
+def _rotating_often(s: Sweep, values: dict) -> str:
+    """Claim 6b's other reading, context only: the paper's words ("exploit rapid rotations") may
+    mean rotating often rather than turning back. Each policy's share of steps rotating either way
+    on `s` (the preset's own sweep, with the most seeds), Welch tests of Boltzmann against the
+    others. Adds its figures to `values`; returns its text."""
+    gs = {p: _paper_group(s, p) for p in ("boltzmann", "eps", "ucb")}
+    share = rotation_share(s)
+    parts, tparts = [], []
+    for p, g in gs.items():
+        if g is not None:
+            m = mean_ci(share[g.indices])
+            values[f"{p} rotation share"] = _num(m[0])
+            parts.append(f"{_short(p)} {_ci(m)}")
+    for p in ("eps", "ucb"):
+        if gs[p] is not None and gs["boltzmann"] is not None:
+            w = welch_t(share[gs["boltzmann"].indices], share[gs[p].indices])
+            values[f"rotation share Boltzmann > {p} p"] = _num(w["p"])
+            tparts.append(f"Boltzmann > {_short(p)}: t={_f(w['t'])}, p={_p(w['p'])}")
+    n = len(s.actions)
+    return (f"read as rotating often (context, not the verdict), {s.name}'s share of steps rotating either way (a "
+            f"uniformly random policy: 2/{n} = {2 / n:.3f}): {', '.join(parts)}; " + "; ".join(tparts))
+
+
+def rotation_share(sweep: Sweep) -> np.ndarray:
+    """[runs]: the share of steps on which an agent rotated, either way (agents pooled)."""
+    rl, rr, total = _turn_counts(sweep)
+    return (rl + rr).sum(axis=(1, 2)) / np.maximum(total, 1)
+
+
+def _turn_counts(sweep: Sweep) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """rotate_left and rotate_right counts [runs, windows, agents], and each run's steps taken."""
+    a = sweep.metrics["action_counts"].astype(float)  # [R, W, agents, actions]
+    rl, rr = a[..., sweep.actions.index("rotate_left")], a[..., sweep.actions.index("rotate_right")]
+    return rl, rr, a.sum(axis=(1, 2, 3))
+
+
 def reversal_rate(sweep: Sweep) -> np.ndarray:
     """[runs]: steps at which an agent turned the other way than at the step before, over the
     pairs of consecutive steps taken inside the windows (agents pooled)."""
@@ -750,9 +788,7 @@ def reversals_against_shuffled(sweep: Sweep) -> np.ndarray:
 def balanced_rotation_share(sweep: Sweep) -> np.ndarray:
     """[runs]: sum over windows and agents of 2 * min(rotate_left, rotate_right), over the steps
     taken (agents pooled): the share of steps alternating turns could at most account for."""
-    a = sweep.metrics["action_counts"].astype(float)  # [R, W, agents, actions]
-    rl, rr = a[..., sweep.actions.index("rotate_left")], a[..., sweep.actions.index("rotate_right")]
-    total = a.sum(axis=(1, 2, 3))
+    rl, rr, total = _turn_counts(sweep)
     return 2 * np.minimum(rl, rr).sum(axis=(1, 2)) / np.maximum(total, 1)
 
 
