@@ -84,7 +84,9 @@ def snapshot(src: str | pathlib.Path, dst: pathlib.Path = SNAPSHOTS) -> list[pat
             old = an.load(target)
             if _command(old.manifest) != _command(s.manifest):
                 raise ValueError(f"{target} holds another sweep ({_command(old.manifest)!r}); "
-                                 f"{s.path} ran {_command(s.manifest)!r}. Move it away first.")
+                                 f"{s.path} ran {_command(s.manifest)!r}. Move it away first, or, for another "
+                                 f"experiment with the preset's settings, name its directory {preset}.<label> "
+                                 "(a side experiment, snapshotted beside the preset's).")
             if old.steps_done > s.steps_done:
                 raise ValueError(f"{target} has {old.steps_done:,} steps done, {s.path} only {s.steps_done:,}")
         # A preset's parts are read over the steps all of them ran: a part still running would cut

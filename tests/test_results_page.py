@@ -311,8 +311,13 @@ def test_snapshot_copies_final_windows_and_refuses_to_lose_any(results, tiny_swe
     other = json.loads((tiny_sweep / "manifest.json").read_text())
     other["command"] = other["command"].replace("seeds=", "seeds=9 was_seeds=")
     (dst / "multi_agent" / "manifest.json").write_text(json.dumps(other))
-    with pytest.raises(ValueError, match="holds another sweep"):
+    with pytest.raises(ValueError, match="holds another sweep.*name its directory multi_agent.<label>"):
         results.snapshot(src, dst)
+    # Named as a side experiment, it goes beside the preset's snapshot, which stays as it was.
+    (src / "multi_agent").rename(src / "multi_agent.order")
+    assert results.snapshot(src, dst) == [dst / "multi_agent.order"]
+    assert json.loads((dst / "multi_agent" / "manifest.json").read_text()) == other
+    assert list(results.load_presets(dst)) == ["multi_agent", "multi_agent.order"]
 
 
 def test_a_presets_seeds_run_in_two_sweeps_snapshot_as_two_parts_and_load_as_one(results, tiny_sweep, tmp_path):
