@@ -584,6 +584,12 @@ def test_a_side_experiment_keeps_its_own_key_and_claim_6b_reads_it_for_the_order
     assert cl.side_experiment("nothing.order") is None
     got = cl.assign_presets([side, main])
     assert list(got) == ["multi_agent", "multi_agent.order"]
+    # Each beside its preset, whatever the order given; one without its preset loaded at the end.
+    single = fake_sweep("single_agent", 1, POLICIES, 4, preset="single_agent")
+    single_side = fake_sweep("single_agent.order", 1, POLICIES, 4, preset="single_agent")
+    got = cl.assign_presets([main, single, single_side, side])
+    assert list(got) == ["multi_agent", "multi_agent.order", "single_agent", "single_agent.order"]
+    assert list(cl.assign_presets([single_side, main])) == ["multi_agent", "single_agent.order"]
     assert got["multi_agent"] is main and got["multi_agent.order"] is side
     # Its seed parts merge among themselves, not into the preset.
     got = cl.assign_presets([main, side, more])

@@ -249,7 +249,7 @@ def assign_presets(sweeps) -> dict[str, Sweep]:
 
     A sweep named `<preset>.<label>` (`side_experiment`; its seed parts `<preset>.<label>.seeds-3-5`)
     is another experiment with that preset's settings, e.g. a shorter sweep that records a metric
-    the preset's sweep lacks: it serves the key `<preset>.<label>`, after the presets, and never
+    the preset's sweep lacks: it serves the key `<preset>.<label>`, right after its preset, and never
     the preset itself (SweepError where its settings do not fit the preset's)."""
     if isinstance(sweeps, (str, pathlib.Path)):
         sweeps = load_sweeps(sweeps)
@@ -281,8 +281,13 @@ def assign_presets(sweeps) -> dict[str, Sweep]:
             if id(s) not in fixed and _fits(s, want):
                 out[preset] = s
                 break
-    out.update({key: merge_sweeps(parts) for key, parts in sides.items()})
-    return out
+    # Each side experiment right after its preset (at the end where its preset is not loaded).
+    ordered: dict[str, Sweep] = {}
+    for key, s in out.items():
+        ordered[key] = s
+        ordered.update({side: merge_sweeps(parts) for side, parts in sides.items() if side.partition(".")[0] == key})
+    ordered.update({side: merge_sweeps(parts) for side, parts in sides.items() if side not in ordered})
+    return ordered
 
 
 def preset_and_sides(presets: Mapping[str, Sweep], preset: str) -> list[Sweep]:
