@@ -1,6 +1,6 @@
-"""The claims table (mjx_curio/analysis/claims.py): its tests against closed forms and hand
-computations, each claim's verdict on synthetic sweeps with a planted effect (and without it),
-and the whole table on the session's tiny sweeps."""
+"""The claims table (mjx_curio/analysis/claims.py): each claim's verdict on synthetic sweeps with
+a planted effect (and without it), and the whole table on the session's tiny sweeps. The tests
+the claims use are checked in test_significance.py."""
 
 import dataclasses
 import itertools
@@ -14,108 +14,6 @@ from mjx_curio import analysis as an
 from mjx_curio.analysis import claims as cl
 from mjx_curio.arena import ACTIONS, AGENT_NAMES, OBJECTS
 from mjx_curio.metrics import SCHEMA, VIEW_TARGETS
-
-# ------------------------------------------------------------------------- p-values vs closed forms
-
-
-@pytest.mark.parametrize("t", [0.0, 0.3, 1.0, 2.5, 12.7, -4.0])
-def test_t_pvalue_matches_closed_forms(t):
-    # df = 1 is the Cauchy distribution, df = 2 has a closed-form CDF as well.
-    assert cl.t_pvalue(t, 1) == pytest.approx(1 - 2 / math.pi * math.atan(abs(t)), abs=1e-12)
-    assert cl.t_pvalue(t, 2) == pytest.approx(1 - abs(t) / math.sqrt(2 + t * t), abs=1e-12)
-
-
-@pytest.mark.parametrize("f,d2", [(0.5, 3), (3.0, 6), (12.0, 6), (40.0, 17.5)])
-def test_f_pvalue_matches_closed_form(f, d2):
-    # With df1 = 2 the F tail is (1 + 2 f / d2) ** (-d2 / 2).
-    assert cl.f_pvalue(f, 2, d2) == pytest.approx((1 + 2 * f / d2) ** (-d2 / 2), rel=1e-10)
-
-
-def test_betainc_special_cases():
-    for x in (0.01, 0.3, 0.77, 0.999):
-        assert cl.betainc(3.5, 1, x) == pytest.approx(x**3.5, rel=1e-10)
-        assert cl.betainc(1, 2.5, x) == pytest.approx(1 - (1 - x) ** 2.5, rel=1e-10)
-        assert cl.betainc(2, 3, x) + cl.betainc(3, 2, 1 - x) == pytest.approx(1, abs=1e-12)
-
-
-def test_welch_t_two_by_two_by_hand():
-    # x, y each [-1, 1] shifted by d: variances 2, se^2 = 2/2 + 2/2 = 2, df = 4 / (1 + 1) = 2.
-    d = 3.0
-    w = cl.welch_t(np.array([-1.0, 1.0]) + d, np.array([-1.0, 1.0]))
-    t = d / math.sqrt(2)
-    assert w["diff"] == pytest.approx(d)
-    assert w["t"] == pytest.approx(t)
-    assert w["df"] == pytest.approx(2)
-    assert w["p"] == pytest.approx(1 - t / math.sqrt(2 + t * t))
-
-
-def test_welch_t_unequal_variances_by_hand():
-    x, y = np.array([1.0, 2.0, 3.0, 4.0]), np.array([2.0, 4.0, 6.0, 8.0, 10.0, np.nan])
-    vx, vy = 5 / 3 / 4, 10.0 / 5  # sample variances 5/3 and 10, over n
-    t = (2.5 - 6.0) / math.sqrt(vx + vy)
-    df = (vx + vy) ** 2 / (vx**2 / 3 + vy**2 / 4)
-    w = cl.welch_t(x, y)
-    assert (w["t"], w["df"], w["ny"]) == (pytest.approx(t), pytest.approx(df), 5)
-    try:  # an independent implementation where one is installed (scipy is not a dependency)
-        from scipy import stats as sps
-    except ImportError:
-        return
-    assert w["p"] == pytest.approx(sps.ttest_ind(x, y[:5], equal_var=False).pvalue, rel=1e-8)
-
-
-def test_one_way_anova_by_hand():
-    # Group means 2, 5, 8, grand mean 5: SS between = 3 * (9 + 0 + 9) = 54; SS within = 2 + 2 + 2 = 6;
-    # F = (54 / 2) / (6 / 6) = 27 on (2, 6) degrees of freedom; p = (1 + 2 * 27 / 6) ** -3 = 1e-3.
-    a = cl.one_way_anova([[1, 2, 3], [4, 5, 6], [7, 8, 9]])
-    assert a["F"] == pytest.approx(27.0)
-    assert (a["df1"], a["df2"]) == (2, 6)
-    assert a["p"] == pytest.approx(10.0**-3)
-    assert a["eta2"] == pytest.approx(54 / 60)
-    same = cl.one_way_anova([[1, 2, 3], [2, 1, 3], [3, 2, 1]])
-    assert same["F"] == pytest.approx(0.0) and same["p"] == pytest.approx(1.0)
-
-
-
-def test_block_anova_with_two_treatments_is_the_paired_t_test():
-    # Two treatments in four blocks: the differences 1, 2, 2, 1 have mean 1.5 and standard deviation
-    # sqrt(1/3), so the paired t = 1.5 / (sqrt(1/3) / 2) = sqrt(27) on 3 degrees of freedom, and the
-    # blocked F on (1, 3) degrees of freedom is t^2 = 27 with the same p-value.
-    y = np.array([[1.0, 2, 3, 4], [2, 4, 5, 5]])
-    b = cl.block_anova(y)
-    assert b["F"] == pytest.approx(27.0) and (b["df1"], b["df2"], b["b"]) == (1, 3, 4)
-    assert b["p"] == pytest.approx(cl.t_pvalue(math.sqrt(27.0), 3))
-    # The error variance of one treatment's value against the other's is that of the differences.
-    assert 2 * b["ms_error"] == pytest.approx(1 / 3)
-    try:  # an independent implementation where one is installed (scipy is not a dependency)
-        from scipy import stats as sps
-    except ImportError:
-        return
-    assert b["p"] == pytest.approx(sps.ttest_rel(y[0], y[1]).pvalue, rel=1e-8)
-
-
-def test_block_anova_removes_block_levels_that_the_one_way_test_counts_as_error():
-    rng = np.random.default_rng(0)
-    y = 0.1 * np.arange(3.0)[:, None] + rng.normal(0, 0.01, (3, 5))  # three treatments, five blocks
-    offsets = np.array([0.0, 3.0, -2.0, 5.0, 1.0])  # each block's own level, shared by its treatments
-    plain, shifted = cl.block_anova(y), cl.block_anova(y + offsets)
-    assert shifted["F"] == pytest.approx(plain["F"]) and shifted["p"] < 1e-6
-    assert shifted["block_share"] > 0.99
-    assert cl.one_way_anova(list(y + offsets))["p"] > 0.5  # the offsets drown the effect in the error term
-    # A block with a missing value is left out; an exactly additive table has no residual.
-    gappy = np.concatenate([y, [[np.nan], [0.0], [0.0]]], axis=1)
-    assert cl.block_anova(gappy)["F"] == pytest.approx(plain["F"]) and cl.block_anova(gappy)["b"] == 5
-    exact = cl.block_anova(np.arange(3.0)[:, None] + offsets)
-    assert exact["F"] == math.inf and exact["p"] == 0.0
-    assert math.isnan(cl.block_anova(y[:, :1])["p"])
-
-def test_pearson_r_known_values():
-    x = np.arange(10.0)
-    assert cl.pearson_r(x, 3 * x + 1) == pytest.approx(1.0)
-    assert cl.pearson_r(x, -x) == pytest.approx(-1.0)
-    # Orthogonal centred vectors: r = 0 exactly.
-    assert cl.pearson_r([1, -1, 1, -1], [1, 1, -1, -1]) == pytest.approx(0.0)
-    assert math.isnan(cl.pearson_r([1, 2], [3, 4]))
-
 
 # ------------------------------------------------------------------------------ synthetic sweeps
 
@@ -364,7 +262,7 @@ def test_temperature_table_on_planted_runs():
     assert [r["late_curiosity"] for r in v[:3]] == pytest.approx(late.reshape(3, 3).mean(axis=1))
     floor = ((np.arange(9) + 2 + 1) / 2).reshape(3, 3).mean(axis=1)  # mean of the agents' squares
     assert [r["floor_cells"] for r in v[:3]] == pytest.approx(floor)
-    want = cl.block_anova(late.reshape(3, 3))
+    want = an.block_anova(late.reshape(3, 3))
     assert (v[3]["late_curiosity F"], v[3]["late_curiosity p"]) == (pytest.approx(want["F"]), pytest.approx(want["p"]))
     assert t.rows[3][2] == f"F(2, 4) = {want['F']:.3g}, p = {want['p']:.3g}" and t.rows[3][1] == "3 seeds"
     assert len({tuple(r) for r in v}) == 1  # every row has the same keys: the CSV can be written
@@ -726,13 +624,13 @@ def test_walls_table_on_planted_runs():
     v = t.values[0]
     assert v["steps"] == 300 and (v["runs different"], v["runs same"]) == (2, 3)
     assert (v["curiosity different"], v["curiosity same"]) == (pytest.approx(1.5), pytest.approx(1.0))
-    assert v["curiosity p"] == pytest.approx(cl.welch_t([1.0, 2.0], [0.5, 1.0, 1.5])["p"])
+    assert v["curiosity p"] == pytest.approx(an.welch_t([1.0, 2.0], [0.5, 1.0, 1.5])["p"])
     assert (v["vae_loss different"], v["vae_loss same"]) == (pytest.approx(15.0), pytest.approx(10.0))
     assert (v["recon different"], v["recon same"]) == (pytest.approx(10.5), pytest.approx(7.0))
     walls_rate = 1000 * np.array([1, 2, 3]) / np.array([300, 300, 100])
     assert v["object_contacts different"] == pytest.approx(walls_rate.mean())
     assert v["object_contacts same"] == pytest.approx(10.0)  # 3 contact steps in 300
-    assert v["object_contacts p"] == pytest.approx(cl.welch_t(walls_rate, [10.0, 10.0, 10.0])["p"])
+    assert v["object_contacts p"] == pytest.approx(an.welch_t(walls_rate, [10.0, 10.0, 10.0])["p"])
     # Not significant (p ~ 0.4): the seeds a side for 80 % power at the difference seen, in the cell.
     need = an.seeds_needed(cl.Tested(np.array([1.0, 2.0]), np.array([0.5, 1.0, 1.5])))
     assert v["curiosity p"] > 0.05 and v["curiosity seeds for 80 % power"] == need and 8 < need < 10_000
@@ -741,9 +639,9 @@ def test_walls_table_on_planted_runs():
     # difference, or none at all, has no count.
     from mjx_curio.analysis import walls
     x, y = [0.5, 1.0, 1.5], [1.0, 2.0]
-    assert walls._seeds_for_power(x, y, cl.welch_t(x, y)) == need
+    assert walls._seeds_for_power(x, y, an.welch_t(x, y)) == need
     assert v["vae_loss seeds for 80 % power"] == need  # ten times the curiosity's values: the same test
-    assert math.isnan(walls._seeds_for_power([1.0, 1.1, 0.9], [5.0, 5.1, 4.9], cl.welch_t([1.0, 1.1, 0.9], [5.0, 5.1, 4.9])))
+    assert math.isnan(walls._seeds_for_power([1.0, 1.1, 0.9], [5.0, 5.1, 4.9], an.welch_t([1.0, 1.1, 0.9], [5.0, 5.1, 4.9])))
     same = an.walls_table({"single_agent_walls_different": s, "single_agent": s}, late_steps=100)
     assert all(math.isnan(x) for k, x in same.values[0].items() if k.endswith("power"))
     # Two agents: the VAE loss is per image, the curiosity the mean of the agents.

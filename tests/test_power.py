@@ -30,12 +30,12 @@ def test_noncentral_t_sf_matches_scipy(df, ncp):
 def test_noncentral_t_sf_closed_forms(df):
     # No shift: the central t, whose two-sided tail the claims' tests use; and symmetry about 0.
     for c in (0.5, 2.0, 6.0):
-        assert pw.noncentral_t_sf(c, df, 0.0) == pytest.approx(cl.t_pvalue(c, df) / 2, abs=1e-6)
+        assert pw.noncentral_t_sf(c, df, 0.0) == pytest.approx(an.t_pvalue(c, df) / 2, abs=1e-6)
     assert pw.noncentral_t_sf(0.0, df, 0.0) == pytest.approx(0.5, abs=1e-6)
     # P(T > 0) = P(Z > -ncp) whatever the denominator.
     assert pw.noncentral_t_sf(0.0, df, 1.5) == pytest.approx(0.5 * math.erfc(-1.5 / math.sqrt(2)), abs=1e-6)
     # The critical value is the quantile of the two-sided test.
-    assert cl.t_pvalue(pw.t_critical(df), df) == pytest.approx(0.05, rel=1e-9)
+    assert an.t_pvalue(pw.t_critical(df), df) == pytest.approx(0.05, rel=1e-9)
 
 
 def test_seeds_needed_reproduces_cohens_tables():
@@ -74,7 +74,7 @@ def test_power_is_the_rate_at_which_the_claims_own_tests_find_an_effect():
     # freedom, so it is itself approximate (off by ~0.01 here).
     n, d, sx, sy, reps = 5, 2.0, 1.0, 2.0, 6_000
     xs, ys = rng.normal(d, sx, (reps, n)), rng.normal(0.0, sy, (reps, n))
-    hits = [(w["p"] < 0.05 and w["diff"] > 0) for w in (cl.welch_t(x, y) for x, y in zip(xs, ys))]
+    hits = [(w["p"] < 0.05 and w["diff"] > 0) for w in (an.welch_t(x, y) for x, y in zip(xs, ys))]
     se, df = pw.design(cl.Tested(d + sx * UNIT, sy * UNIT), n)
     assert np.mean(hits) == pytest.approx(pw.t_power(d / se, df), abs=0.035)
     # Blocked: two of 5 treatments compared with the residual error of `block_anova`, seeds with

@@ -43,9 +43,10 @@ and the numbers behind them (`moving_average`, `mean_ci`, `cumulative_interactio
 orbax for checkpoints); plotting needs matplotlib.
 
 The package, by job; each module imports only those above it (sweeps none; stats, recon and
-action_values sweeps; tables sweeps and stats; claims sweeps, stats and tables; temperatures
-claims, stats and tables; power claims and tables; walls claims, power, stats, sweeps and
-tables; figures sweeps, stats, recon, action_values and temperatures):
+action_values sweeps; tables sweeps and stats; significance none; claims significance, sweeps,
+stats and tables; temperatures claims, significance, stats and tables; power claims,
+significance and tables; walls claims, power, significance, stats, sweeps and tables; figures
+sweeps, stats, recon, action_values and temperatures):
 
     sweeps    loading: `load`, `find_sweeps`, `load_sweeps`, `merge_sweeps` (one experiment's seeds
               from several sweeps), `join_seed_parts` (every such experiment of a list merged),
@@ -64,9 +65,11 @@ tables; figures sweeps, stats, recon, action_values and temperatures):
               buffer, and the Boltzmann policy's probabilities there: `action_values` (JAX) and
               the `ActionValues` it returns
     tables    the headline table: `headline_table` and its `Table` (Markdown, CSV)
+    significance  the tests, in NumPy alone: `welch_t`, `one_way_anova`, `block_anova`,
+              `pearson_r`, `fisher_z`, and the t and F tails behind them (`t_pvalue`, `f_pvalue`,
+              `betainc`)
     claims    the paper's claims tested across seeds: `claims_table` (one row per claim: statistic,
-              95% CI or p-value, verdict), a `claim_*` function per claim, `assign_presets`, and the
-              NumPy tests they use (`welch_t`, `one_way_anova`, `block_anova`, `t_pvalue`, `f_pvalue`, `betainc`)
+              95% CI or p-value, verdict), a `claim_*` function per claim, and `assign_presets`
     temperatures  what a Boltzmann sweep's temperatures change, run by run: `temperature_table`
               and the `temperature_measures` behind it; `policy_measures_table`, the same per
               policy
@@ -93,8 +96,6 @@ from mjx_curio.analysis.claims import (
     agent_curiosity_coupling,
     assign_presets,
     balanced_rotation_share,
-    betainc,
-    block_anova,
     claim_agents_move_together,
     claim_boltzmann_trembles,
     claim_contact_ranking,
@@ -108,19 +109,24 @@ from mjx_curio.analysis.claims import (
     claim_two_agents_higher,
     claims_table,
     curiosity_fall_rise,
-    f_pvalue,
-    fisher_z,
     late_curiosity,
     moving_object_shares,
-    one_way_anova,
-    pearson_r,
     reversal_rate,
     reversals_against_shuffled,
+    rotation_share,
     running_action_baseline,
     seed_coupling,
     self_model_tracking,
-    t_pvalue,
     watching_excess,
+)
+from mjx_curio.analysis.significance import (
+    betainc,
+    block_anova,
+    f_pvalue,
+    fisher_z,
+    one_way_anova,
+    pearson_r,
+    t_pvalue,
     welch_t,
 )
 from mjx_curio.analysis.figures import (
@@ -225,15 +231,17 @@ __all__ = [
     "WALLS_PAIRS", "walls_measures", "walls_table",
     # power
     "detectable", "noncentral_t_sf", "power_table", "seeds_needed", "t_power",
+    # significance
+    "betainc", "block_anova", "f_pvalue", "fisher_z", "one_way_anova", "pearson_r", "t_pvalue", "welch_t",
     # claims
     "CLAIMS", "ClaimResult", "Tested", "VERDICTS", "action_shares", "agent_curiosity_coupling", "assign_presets",
-    "balanced_rotation_share", "betainc", "block_anova", "claim_agents_move_together", "claim_boltzmann_trembles",
+    "balanced_rotation_share", "claim_agents_move_together", "claim_boltzmann_trembles",
     "claim_contact_ranking", "claim_curiosity_dip_and_rise", "claim_observational_curiosity",
     "claim_prefers_moving_objects", "claim_self_model_predicts", "claim_stop_least", "claim_temperatures_alike",
-    "claim_two_agents_higher", "claim_results", "claims_table", "curiosity_fall_rise", "f_pvalue", "fisher_z",
-    "late_curiosity", "moving_object_shares", "one_way_anova", "pearson_r", "reversal_rate",
-    "reversals_against_shuffled", "running_action_baseline", "seed_coupling",
-    "self_model_tracking", "t_pvalue", "watching_excess", "welch_t",
+    "claim_two_agents_higher", "claim_results", "claims_table", "curiosity_fall_rise",
+    "late_curiosity", "moving_object_shares", "reversal_rate",
+    "reversals_against_shuffled", "rotation_share", "running_action_baseline", "seed_coupling",
+    "self_model_tracking", "watching_excess",
     # figures
     "AGENT_COLORS", "CURIOSITY_LABEL", "FIGURES_DIRNAME", "POLICY_COLORS", "STEPS_LABEL", "TARGET_COLORS",
     "empty_axes", "figures_dir", "plot_action_histogram", "plot_boltzmann_greediness", "plot_cumulative_interactions",

@@ -16,7 +16,7 @@ spread comes from the runs themselves: with 3 seeds a standard deviation is unce
 of about 0.5 to 6 (95 %), so read "seeds for 80 % power" as an order of magnitude, not a plan.
 
 The power of a t test is a tail of the noncentral t distribution (`noncentral_t_sf`), integrated
-here with NumPy alone, as the claims' own tests are. Imports `claims` and `tables`.
+here with NumPy alone, as the claims' own tests are. Imports `claims`, `significance` and `tables`.
 """
 
 from __future__ import annotations
@@ -25,7 +25,8 @@ import math
 
 import numpy as np
 
-from mjx_curio.analysis.claims import ALPHA, Tested, _finite, _num, block_anova, claim_results, t_pvalue
+from mjx_curio.analysis.claims import ALPHA, Tested, _num, claim_results
+from mjx_curio.analysis.significance import block_anova, finite, t_pvalue
 from mjx_curio.analysis.tables import Table
 
 POWER = 0.8
@@ -98,10 +99,10 @@ def effect(tested: Tested) -> float:
         y = _complete_blocks(tested.x)
         means = y.mean(axis=1) if y.size else np.array([math.nan])
         return float(means.max() - means.min())
-    x = _finite(tested.x)
+    x = finite(tested.x)
     if tested.y is None:
         return float(x.mean() - tested.null) if len(x) else math.nan
-    y = _finite(tested.y)
+    y = finite(tested.y)
     return float(x.mean() - y.mean()) if len(x) and len(y) else math.nan
 
 
@@ -109,7 +110,7 @@ def seeds_now(tested: Tested) -> int:
     """The seeds a group ran: complete blocks, or finite runs (the smaller side) per seed."""
     if tested.blocked:
         return block_anova(tested.x)["b"]
-    n = len(_finite(tested.x)) if tested.y is None else min(len(_finite(tested.x)), len(_finite(tested.y)))
+    n = len(finite(tested.x)) if tested.y is None else min(len(finite(tested.x)), len(finite(tested.y)))
     return n // tested.runs_per_seed
 
 
@@ -190,7 +191,7 @@ def power_table(sweeps) -> Table:
 
 
 def _var(x) -> float:
-    x = _finite(x)
+    x = finite(x)
     return float(x.var(ddof=1)) if len(x) >= 2 else math.nan
 
 

@@ -4,7 +4,8 @@ measures per policy of any sweep (`policy_measures_table`), to set the temperatu
 
 Runs of one seed draw the same random numbers, and where the policy is near-uniform they repeat
 much of each other's course at every T (`claims.seed_coupling`), so each measure's test across T
-removes each seed's own level first (`claims.block_anova`). Imports `claims`, `stats`, `tables`.
+removes each seed's own level first (`significance.block_anova`). Imports `claims`, `significance`, `stats`,
+`tables`.
 """
 
 from __future__ import annotations
@@ -13,7 +14,8 @@ import math
 
 import numpy as np
 
-from mjx_curio.analysis.claims import block_anova, late_curiosity, seed_table
+from mjx_curio.analysis.claims import late_curiosity, seed_table
+from mjx_curio.analysis.significance import block_anova
 from mjx_curio.analysis.stats import cells_visited, mean_ci, object_contacts
 from mjx_curio.analysis.sweeps import Sweep, SweepError
 from mjx_curio.analysis.tables import Table

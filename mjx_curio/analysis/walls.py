@@ -6,8 +6,8 @@ having different walls, and compares nothing; this table is the comparison it le
 Runs are the units (Welch's t-test across seeds); where a difference is not significant, the
 seeds a side the test would need to find it 8 times in 10 (`power.seeds_needed`, the observed
 spread taken as the truth). A run whose simulation diverged counts only where its windows are data
-(`sweeps.drop_diverged` blanks the rest). Imports `claims`, `power`, `stats`, `sweeps` and
-`tables`.
+(`sweeps.drop_diverged` blanks the rest). Imports `claims`, `power`, `significance`,
+`stats`, `sweeps` and `tables`.
 """
 
 from __future__ import annotations
@@ -18,8 +18,9 @@ from typing import Mapping
 
 import numpy as np
 
-from mjx_curio.analysis.claims import ALPHA, Tested, _finite, welch_t
+from mjx_curio.analysis.claims import ALPHA, Tested
 from mjx_curio.analysis.power import MAX_SEEDS, seeds_needed
+from mjx_curio.analysis.significance import finite, welch_t
 from mjx_curio.analysis.stats import object_contacts, per_agent_vae_loss
 from mjx_curio.analysis.sweeps import Group, Sweep
 from mjx_curio.analysis.tables import Table
@@ -135,5 +136,5 @@ def _seeds_for_power(x, y, welch: dict) -> float:
 
 
 def _nanmean(x) -> float:
-    x = _finite(x)
+    x = finite(x)
     return float(x.mean()) if len(x) else math.nan

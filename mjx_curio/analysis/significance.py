@@ -1,0 +1,161 @@
+"""Significance tests in NumPy and the standard library: Student t and F tails, Welch's t, one-way
+and block ANOVA, Pearson's r and Fisher's z.
+
+The tails come from the regularised incomplete beta function (`betainc`, a continued fraction),
+so the analysis needs no SciPy; the tests check them against closed forms and hand computations.
+The claims (`claims.py`), the power of their tests (`power.py`) and the
+measure-by-measure tables (`temperatures.py`, `walls.py`) use them. Imports nothing of the package.
+"""
+
+from __future__ import annotations
+
+import math
+from typing import Sequence
+
+import numpy as np
+
+
+def finite(x) -> np.ndarray:
+    """`x` flattened, without its NaNs and infinities."""
+    x = np.asarray(x, float).reshape(-1)
+    return x[np.isfinite(x)]
+
+
+def betainc(a: float, b: float, x: float) -> float:
+    """Regularised incomplete beta function I_x(a, b), by its continued fraction (modified Lentz;
+    the symmetry I_x(a, b) = 1 - I_{1-x}(b, a) keeps the fraction where it converges fast)."""
+    if not (a > 0 and b > 0) or not np.isfinite(x):
+        return math.nan
+    if x <= 0:
+        return 0.0
+    if x >= 1:
+        return 1.0
+    log_front = math.lgamma(a + b) - math.lgamma(a) - math.lgamma(b) + a * math.log(x) + b * math.log1p(-x)
+    if x > (a + 1) / (a + b + 2):
+        return 1.0 - betainc(b, a, 1.0 - x)
+    tiny, eps = 1e-300, 1e-15
+    c, d = 1.0, 1.0 - (a + b) * x / (a + 1)
+    d = 1.0 / (d if abs(d) > tiny else tiny)
+    h = d
+    for m in range(1, 10_000):
+        for num in (m * (b - m) * x / ((a + 2 * m - 1) * (a + 2 * m)),
+                    -(a + m) * (a + b + m) * x / ((a + 2 * m) * (a + 2 * m + 1))):
+            d = 1.0 + num * d
+            d = 1.0 / (d if abs(d) > tiny else tiny)
+            c = 1.0 + num / c
+            c = c if abs(c) > tiny else tiny
+            h *= c * d
+        if abs(c * d - 1.0) < eps:
+            break
+    return math.exp(log_front) * h / a
+
+
+def t_pvalue(t: float, df: float) -> float:
+    """Two-sided p-value of Student's t with `df` (real) degrees of freedom: P(|T| >= |t|)."""
+    if not (np.isfinite(t) and np.isfinite(df) and df > 0):
+        return math.nan
+    return betainc(df / 2.0, 0.5, df / (df + t * t))
+
+
+def f_pvalue(f: float, df1: float, df2: float) -> float:
+    """Upper tail of the F distribution: P(F >= f) with (df1, df2) degrees of freedom."""
+    if not (np.isfinite(f) and df1 > 0 and df2 > 0):
+        return math.nan
+    if f <= 0:
+        return 1.0
+    return betainc(df2 / 2.0, df1 / 2.0, df2 / (df2 + df1 * f))
+
+
+def welch_t(x, y) -> dict:
+    """Welch's unequal-variance t-test of mean(x) - mean(y) (NaNs dropped): {"diff", "t", "df",
+    "p" (two-sided), "nx", "ny"}; t, df and p are NaN below 2 values a side or with no spread."""
+    x, y = finite(x), finite(y)
+    out = {"diff": math.nan, "t": math.nan, "df": math.nan, "p": math.nan, "nx": len(x), "ny": len(y)}
+    if len(x) and len(y):
+        out["diff"] = float(x.mean() - y.mean())
+    if len(x) < 2 or len(y) < 2:
+        return out
+    vx, vy = x.var(ddof=1) / len(x), y.var(ddof=1) / len(y)
+    se2 = vx + vy
+    if se2 <= 0:
+        return out
+    t = out["diff"] / math.sqrt(se2)
+    df = se2**2 / (vx**2 / (len(x) - 1) + vy**2 / (len(y) - 1)) if vx > 0 and vy > 0 else (
+        len(x) - 1 if vx > 0 else len(y) - 1)
+    out.update(t=float(t), df=float(df), p=t_pvalue(t, df))
+    return out
+
+
+def one_way_anova(groups: Sequence) -> dict:
+    """One-way ANOVA across `groups` (each a 1-D array; NaNs dropped, groups with no value left
+    out): {"F", "df1", "df2", "p", "eta2" (between-group share of the total sum of squares), "k",
+    "n"}. NaN where fewer than 2 groups, no within-group degrees of freedom, or no spread."""
+    gs = [g for g in (finite(g) for g in groups) if len(g)]
+    k, n = len(gs), sum(len(g) for g in gs)
+    out = {"F": math.nan, "df1": k - 1, "df2": n - k, "p": math.nan, "eta2": math.nan, "k": k, "n": n}
+    if k < 2 or n - k < 1:
+        return out
+    grand = np.concatenate(gs).mean()
+    ss_between = sum(len(g) * (g.mean() - grand) ** 2 for g in gs)
+    ss_within = sum(((g - g.mean()) ** 2).sum() for g in gs)
+    if ss_between + ss_within <= 0:
+        return out
+    out["eta2"] = float(ss_between / (ss_between + ss_within))
+    if ss_within <= 0:
+        return out
+    f = (ss_between / (k - 1)) / (ss_within / (n - k))
+    out.update(F=float(f), p=f_pvalue(f, k - 1, n - k))
+    return out
+
+
+def block_anova(table) -> dict:
+    """Two-way ANOVA without interaction on a [treatments, blocks] table, one value a cell: the
+    treatment effect tested after removing each block's own level (a randomized complete block
+    design). Runs of one seed share their random numbers, so a seed is a block; removing its level
+    takes the variance the runs of one seed share out of the error term. Blocks with a NaN are
+    left out. {"F", "df1", "df2", "p", "eta2" (treatment share of the sum of squares left after
+    the blocks'), "block_share" (the blocks' share of the total), "ms_error" (the residual mean
+    square, the error variance of a comparison of treatments), "k", "b"}. NaN where fewer than
+    2 treatments or 2 blocks or no spread; F = inf, p = 0 where the residual is exactly 0 but the
+    treatments differ."""
+    y = np.asarray(table, float)
+    y = y[:, np.isfinite(y).all(axis=0)]
+    k, b = y.shape
+    out = {"F": math.nan, "df1": k - 1, "df2": (k - 1) * (b - 1), "p": math.nan, "eta2": math.nan,
+           "block_share": math.nan, "ms_error": math.nan, "k": k, "b": b}
+    if k < 2 or b < 2:
+        return out
+    grand = y.mean()
+    ss_treat = b * ((y.mean(axis=1) - grand) ** 2).sum()
+    ss_block = k * ((y.mean(axis=0) - grand) ** 2).sum()
+    ss_total = ((y - grand) ** 2).sum()
+    ss_error = max(ss_total - ss_treat - ss_block, 0.0)
+    if ss_total <= 0:
+        return out
+    out["block_share"] = float(ss_block / ss_total)
+    out["ms_error"] = float(ss_error / out["df2"])
+    out["eta2"] = float(ss_treat / (ss_treat + ss_error)) if ss_treat + ss_error > 0 else math.nan
+    # The residual of an exactly additive table is 0 up to rounding of the sums above.
+    if ss_error <= 1e-12 * ss_total:
+        if ss_treat > 1e-12 * ss_total:
+            out.update(F=math.inf, p=0.0)
+        return out
+    f = (ss_treat / out["df1"]) / (ss_error / out["df2"])
+    out.update(F=float(f), p=f_pvalue(f, out["df1"], out["df2"]))
+    return out
+
+
+def pearson_r(x, y) -> float:
+    """Pearson correlation over the positions where both are finite; NaN below 3 or with no spread."""
+    x, y = np.asarray(x, float), np.asarray(y, float)
+    ok = np.isfinite(x) & np.isfinite(y)
+    if ok.sum() < 3:
+        return math.nan
+    x, y = x[ok] - x[ok].mean(), y[ok] - y[ok].mean()
+    den = math.sqrt(float((x * x).sum() * (y * y).sum()))
+    return float((x * y).sum() / den) if den > 0 else math.nan
+
+
+def fisher_z(r) -> np.ndarray:
+    """arctanh(r), with |r| clipped below 1 so a perfect correlation stays finite."""
+    return np.arctanh(np.clip(np.asarray(r, float), -0.999999, 0.999999))
