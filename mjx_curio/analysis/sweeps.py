@@ -280,6 +280,13 @@ class Sweep:
     def checkpoints_dir(self) -> pathlib.Path:
         return self.path / "checkpoints"
 
+    @property
+    def has_checkpoints(self) -> bool:
+        """Whether `checkpoints` has any to read: a sweep's own (a merged sweep's are its parts'),
+        where they were written and kept (a snapshot of the metrics, as the results page commits,
+        has none)."""
+        return not self.parts and (self.checkpoints_dir / "state").is_dir()
+
     def checkpoints(self):
         """The sweep's `checkpoint.Checkpoints`, read-only (SweepError if there are none)."""
         if self.parts:
