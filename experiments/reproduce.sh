@@ -50,9 +50,11 @@
 #   reconstruction_evidence.py              about 2 min a sweep of 9 runs with 4 checkpoints (beside a running sweep)
 #
 # Claim 6b (trembling) needs the order of actions, which the page's multi_agent sweeps ran too
-# early to record; the page reads it from a side experiment with the same settings, 3 seeds x
-# 20,000 steps (about 3 h 30 min on the AMD EPYC above over three sessions, 10-18 run-steps/s):
+# early to record; the page reads it from a side experiment with the same settings, 6 seeds x
+# 20,000 steps in two sweeps of 3 (each about 3 h on the AMD EPYC above, over two or three
+# sessions, 7-21 run-steps/s):
 #     python -m mjx_curio.sweep preset=multi_agent seeds=3 steps=20000 checkpoint_every=1000 out=runs/paper/multi_agent.order
+#     python -m mjx_curio.sweep preset=multi_agent seeds=3 first_seed=3 steps=20000 checkpoint_every=1000 out=runs/paper/multi_agent.order.seeds-3-5
 # This script does not run it: a multi_agent sweep made now records the order itself, and claim
 # 6b reads that first.
 #
