@@ -49,6 +49,19 @@ SCHEMA: dict[str, Metric] = {
                                "curiosity reward at the window's last step (the paper's raw sample every 20 steps), per agent"),
     "predicted": Metric("float32", A, "squared latent distance",
                         "self-model's predicted curiosity of the action taken, mean over the window, per agent"),
+    # Within-window second moments of the per-step (predicted, obtained) pairs: the window means
+    # above cannot say whether the self-model tracks curiosity step by step, and these three give
+    # the pooled within-window correlation without storing every step (analysis: claim 8).
+    "predicted_var": Metric("float32", A, "(squared latent distance)^2",
+                            "variance over the window's steps of the predicted curiosity of the action taken, per agent"),
+    "curiosity_var": Metric("float32", A, "(squared latent distance)^2",
+                            "variance over the window's steps of the curiosity obtained, per agent"),
+    "predicted_curiosity_cov": Metric("float32", A, "(squared latent distance)^2",
+                                      "covariance over the window's steps of the predicted and the obtained curiosity, "
+                                      "per agent"),
+    "curiosity_by_action": Metric("float32", ("agents", "actions"), "squared latent distance",
+                                  "mean curiosity obtained at the window's steps that took each action (manifest "
+                                  "'actions' order; NaN where none did), per agent"),
     "action_counts": Metric("int32", ("agents", "actions"), "steps",
                             "how often each action (manifest 'actions' order) was taken in the window, per agent"),
     "rotation_reversals": Metric("int32", A, "steps",

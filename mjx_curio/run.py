@@ -239,28 +239,42 @@ def reduce_windows(cfg: RunConfig, step_m: dict, learn_m: dict) -> dict:
     ran = win(step_m["taken"], w)  # [W, w]: step was actually taken (not halted)
     n_ran = jnp.sum(ran, axis=1)  # [W]
 
-    def mean_steps(x):  # mean over the steps taken in each window, NaN if none
-        x = win(x).astype(jnp.float32)
+    def sum_steps(x):  # sum over the steps taken in each window (a halted step's NaN left out)
+        x = win(x)
         r = ran.reshape(ran.shape + (1,) * (x.ndim - 2))
-        total = jnp.sum(jnp.where(r, x, 0.0), axis=1)
-        n = n_ran.reshape(n_ran.shape + (1,) * (x.ndim - 2))
+        return jnp.sum(jnp.where(r, x, jnp.zeros((), x.dtype)), axis=1)
+
+    def per_step(total, n):  # total / n where n > 0, NaN elsewhere
+        n = n.reshape(n.shape + (1,) * (total.ndim - n.ndim))
         return jnp.where(n > 0, total / jnp.maximum(n, 1), jnp.nan)
 
+    def mean_steps(x):  # mean over the steps taken in each window, NaN if none
+        return per_step(sum_steps(x.astype(jnp.float32)), n_ran)
+
     def count_steps(x):
-        x = win(x).astype(jnp.int32)
-        r = ran.reshape(ran.shape + (1,) * (x.ndim - 2))
-        return jnp.sum(jnp.where(r, x, 0), axis=1)
+        return sum_steps(x.astype(jnp.int32))
+
+    def cov_steps(x, y):  # covariance over the steps taken in each window (population), NaN if none
+        mx, my = jnp.repeat(mean_steps(x), w, axis=0), jnp.repeat(mean_steps(y), w, axis=0)
+        return mean_steps((x - mx) * (y - my))
 
     def last(x):
         return win(x)[:, -1]
 
     a = step_m["action"]
+    c, q = step_m["curiosity"], step_m["predicted"]
+    took = jax.nn.one_hot(a, cfg.learner.n_actions, dtype=jnp.int32)  # [T, agents, actions]
+    counts = count_steps(took)
     out = {
+        "predicted_var": cov_steps(q, q),
+        "curiosity_var": cov_steps(c, c),
+        "predicted_curiosity_cov": cov_steps(q, c),
+        "curiosity_by_action": per_step(sum_steps(c[..., None] * took), counts),
         "rotation_reversals": count_reversals(a, ran),
         "curiosity": mean_steps(step_m["curiosity"]),
         "curiosity_sample": jnp.where(ran[:, -1][:, None], last(step_m["curiosity"]), jnp.nan),
         "predicted": mean_steps(step_m["predicted"]),
-        "action_counts": count_steps(jax.nn.one_hot(a, cfg.learner.n_actions, dtype=jnp.int32)),
+        "action_counts": counts,
         "contact_object": count_steps(step_m["contact_object"]),
         "contact_agent": count_steps(step_m["contact_agent"]),
         "view_fraction": mean_steps(step_m["view_fraction"]),
