@@ -12,6 +12,7 @@ import pytest
 
 from mjx_curio import analysis as an
 from mjx_curio.analysis import claims as cl
+from mjx_curio.analysis.self_model import STEP_METRICS, action_baseline_moments, step_tracking
 from mjx_curio.arena import ACTIONS, AGENT_NAMES, OBJECTS
 from mjx_curio.metrics import SCHEMA, VIEW_TARGETS
 
@@ -381,11 +382,95 @@ def test_self_model_claim_on_planted_predictions():
     pred = 0.6 + 0.1 * rng.normal(size=shape)  # early: knows nothing
     pred[:, 400:] = cur[:, 400:] + 0.02 * rng.normal(size=(3, 800, 2))  # later: knows the outcome
     s.metrics["predicted"][:] = pred
+    for name in STEP_METRICS:  # a sweep made before the window moments: window means only
+        del s.metrics[name]
     d = cl.self_model_tracking(s)
     assert np.all(np.abs(np.tanh(d["self_early"])) < 0.2) and np.all(np.tanh(d["self_late"]) > 0.95)
     assert np.all(np.abs(np.tanh(d["base_late"])) < 0.2)
     r = cl.claim_self_model_predicts({"multi_agent": s})
     assert r.verdict.startswith("holds"), r.verdict
+    assert "window means detrended" in r.statistic and "only window means are compared" in r.statistic
+
+
+def _step_windows(s, every, c, q, a):
+    """Fill a fake sweep's window metrics from per-step values [runs, steps, agents] as a sweep
+    records them (every step taken)."""
+    r, t, n_agents = c.shape
+    win = lambda x: x.reshape(r, t // every, every, *x.shape[2:])  # noqa: E731
+    cw, qw, aw = win(c), win(q), win(a)
+    took = aw[..., None] == np.arange(7)  # [R, W, w, agents, 7]
+    counts = took.sum(axis=2)
+    s.metrics["curiosity"][:] = cw.mean(axis=2)
+    s.metrics["predicted"][:] = qw.mean(axis=2)
+    s.metrics["predicted_var"][:] = qw.var(axis=2)
+    s.metrics["curiosity_var"][:] = cw.var(axis=2)
+    s.metrics["predicted_curiosity_cov"][:] = ((qw - qw.mean(axis=2, keepdims=True))
+                                               * (cw - cw.mean(axis=2, keepdims=True))).mean(axis=2)
+    with np.errstate(invalid="ignore"):
+        s.metrics["curiosity_by_action"][:] = (cw[..., None] * took).sum(axis=2) / counts
+    s.metrics["action_counts"][:] = counts
+
+
+def _pooled_within(x, y, every):
+    """The Pearson correlation of per-step values [steps] after each window's mean is taken out."""
+    x, y = x.reshape(-1, every), y.reshape(-1, every)
+    x, y = x - x.mean(axis=1, keepdims=True), y - y.mean(axis=1, keepdims=True)
+    return (x * y).sum() / np.sqrt((x * x).sum() * (y * y).sum())
+
+
+def test_per_step_tracking_is_the_within_window_correlation_of_the_steps():
+    rng = np.random.default_rng(6)
+    every, n_w, history = 10, 30, 4
+    s = fake_sweep("multi_agent", 2, POLICIES, n_w, seeds=1, every=every)
+    shape = (3, n_w * every, 2)
+    a = rng.integers(0, 7, shape)
+    trend = np.linspace(0.8, 0.4, n_w * every)[None, :, None]  # shared by every curve: windows take it out
+    c = trend + 0.05 * a + 0.1 * rng.normal(size=shape)  # curiosity depends on the action, and on chance
+    q = trend + 0.5 * (c - trend) + 0.1 * rng.normal(size=shape)  # the self-model sees some of it
+    _step_windows(s, every, c, q, a)
+    d = step_tracking(s, history=history)
+    third = n_w // 3
+    first, last = slice(0, third * every), slice((n_w - third) * every, n_w * every)
+    z = lambda f: np.mean([np.arctanh(f(i, j)) for j in range(2)])  # noqa: E731
+    for i in range(3):
+        assert d["self_early"][i] == pytest.approx(z(lambda i, j: _pooled_within(q[i, first, j], c[i, first, j], every)))
+        assert d["self_late"][i] == pytest.approx(z(lambda i, j: _pooled_within(q[i, last, j], c[i, last, j], every)))
+
+        def baseline_r(i, j):  # each step predicted by its action's running mean, step by step
+            b = np.empty(n_w * every)
+            for w in range(n_w):
+                seen = slice(max(w - history, 0) * every, w * every)
+                ca, aa = c[i, seen, j], a[i, seen, j]
+                prior = ca.mean() if ca.size else 0.0
+                for t in range(w * every, (w + 1) * every):
+                    mine = ca[aa == a[i, t, j]]
+                    b[t] = (mine.sum() + prior) / (mine.size + 1)
+            return _pooled_within(b[last], c[i, last, j], every)
+
+        assert d["base_late"][i] == pytest.approx(z(baseline_r))
+    assert np.all(d["edge"] == d["self_late"] - d["base_late"])
+    # The first window has seen nothing: no baseline there, and the early third's windows still count.
+    n_var_b, _ = action_baseline_moments(s.metrics["action_counts"], s.metrics["curiosity_by_action"], history)
+    assert np.isnan(n_var_b[:, 0]).all() and np.isfinite(n_var_b[:, 1:]).all()
+
+
+def test_the_self_model_claim_reads_per_step_pairs_where_the_sweep_records_them():
+    rng = np.random.default_rng(7)
+    s = fake_sweep("multi_agent", 2, POLICIES, 1200, seeds=1)  # 24,000 steps, 3 runs
+    shape = (3, 1200 * 20, 2)
+    a = rng.integers(0, 7, shape)
+    c = 0.6 + 0.1 * rng.normal(size=shape)
+    q = 0.6 + 0.1 * rng.normal(size=shape)  # early: knows nothing
+    q[:, 8000:] = c[:, 8000:] + 0.05 * rng.normal(size=(3, 16000, 2))  # later: knows each step's outcome
+    _step_windows(s, 20, c, q, a)
+    # The window means alone hide it: every window's mean prediction is the same.
+    s.metrics["predicted"][:] = 0.6
+    r = cl.claim_self_model_predicts({"multi_agent": s})
+    assert "per-step pairs, correlated within 20-step windows" in r.statistic, r.statistic
+    assert r.verdict.startswith("holds"), r.verdict
+    # late: corr = sd(c) / sd(q) = 0.1 / sqrt(0.1^2 + 0.05^2) per step
+    assert r.values["z self late"] == pytest.approx(np.arctanh(0.1 / np.sqrt(0.0125)), abs=0.02)
+    assert abs(r.values["z self early"]) < 0.05 and abs(r.values["z baseline late"]) < 0.05
 
 
 def test_observational_curiosity_on_planted_windows():

@@ -60,6 +60,7 @@ from mjx_curio.analysis.stats import (
     turn_reversals,
 )
 from mjx_curio.analysis.significance import block_anova, fisher_z, one_way_anova, pearson_r, welch_t
+from mjx_curio.analysis.self_model import records_steps, step_tracking, trailing_sum
 from mjx_curio.analysis.sweeps import Group, Sweep, SweepError, load_sweeps, merge_sweeps, side_experiment
 from mjx_curio.analysis.tables import Table
 
@@ -738,9 +739,12 @@ def claim_self_model_predicts(presets: Mapping[str, Sweep]) -> ClaimResult:
     predicted curiosity of the chosen action tracks the curiosity obtained, better as it trains
     and better than a baseline that predicts each action's running mean.
 
-    The metrics hold, per 20-step window and agent, the mean predicted curiosity of the actions
-    taken (`predicted`) and the mean obtained (`curiosity`), and the action counts; not per-step
-    (prediction, outcome) pairs. Measured per run of multi_agent and agent on these window means,
+    Where the sweep records each window's variances and covariance of the per-step predicted and
+    obtained curiosity, and each action's mean curiosity (sweeps made since those metrics were
+    added), the correlations are of per-step pairs, pooled within windows
+    (`self_model.step_tracking`); the rest of the test is the same. Older sweeps hold, per 20-step
+    window and agent, only the mean predicted curiosity of the actions taken (`predicted`), the
+    mean obtained (`curiosity`) and the action counts. Measured per run of multi_agent and agent on these window means,
     each detrended by its own trailing moving average of 50 windows (the slow fall and rise would
     otherwise make any two smooth curves correlate): r_self = corr(predicted, obtained) and
     r_base = corr(baseline, obtained), where the baseline predicts a window's curiosity as its
@@ -756,17 +760,22 @@ def claim_self_model_predicts(presets: Mapping[str, Sweep]) -> ClaimResult:
     s = presets.get("multi_agent")
     if s is None:
         return ClaimResult(key, claim, evidence, "n/a", _missing(("multi_agent",), presets))
-    d = self_model_tracking(s)
+    per_step = records_steps(s)
+    d = step_tracking(s) if per_step else self_model_tracking(s)
     early, late, base = mean_ci(d["self_early"]), mean_ci(d["self_late"]), mean_ci(d["base_late"])
     rise, edge = mean_ci(d["rise"]), mean_ci(d["edge"])
     n = int(np.isfinite(d["rise"] + d["edge"]).sum())
     values = {"z self early": _num(early[0]), "z self late": _num(late[0]), "z baseline late": _num(base[0]),
               "rise": _num(rise[0]), "rise low": _num(rise[1]), "edge": _num(edge[0]), "edge low": _num(edge[1]),
               "runs": n}
-    stat = (f"{s.name}, runs: {n}, 20-step window means detrended: Fisher z of corr(predicted, obtained) first third "
+    how = ("per-step pairs, correlated within 20-step windows (the window moments the sweep records)" if per_step
+           else "20-step window means detrended")
+    stat = (f"{s.name}, runs: {n}, {how}: Fisher z of corr(predicted, obtained) first third "
             f"{_ci(early)}, last third {_ci(late)}; action-running-mean baseline, last third {_ci(base)}; rise "
-            f"{_ci(rise)}, edge over baseline {_ci(edge)}. Per-step pairs are not recorded (only window means and "
-            "`curiosity_sample`, with no matching prediction)")
+            f"{_ci(rise)}, edge over baseline {_ci(edge)}")
+    if not per_step:
+        stat += (". Per-step pairs: this sweep ran before sweeps recorded each window's variances and covariance of "
+                 "predicted and obtained curiosity, so only window means are compared")
     gap = _scale_gap(s, 20_000, {"runs": n})
     fails = [] if rise[1] > 0 else ["the correlation does not rise significantly"]
     fails += [] if edge[1] > 0 else ["the self-model does not beat the baseline significantly"]
@@ -816,11 +825,7 @@ def running_action_baseline(curiosity, action_counts, history: int = SMOOTH, rid
     x0, y0 = np.where(ok[..., None], x, 0.0), np.where(ok, y, 0.0)
     k = x.shape[-1]
 
-    def trailing(v):  # sum over the previous `history` windows (not this one), along axis 1
-        cs = np.concatenate([np.zeros_like(v[:, :1]), np.cumsum(v, axis=1)], axis=1)  # cs[w] = sum of v[:w]
-        w = np.arange(v.shape[1])
-        return cs[:, w] - cs[:, np.maximum(w - history, 0)]
-
+    trailing = lambda v: trailing_sum(v, history)  # noqa: E731
     xx = trailing(x0[..., :, None] * x0[..., None, :])  # [R, W, A, K, K]
     xy = trailing(x0 * y0[..., None])  # [R, W, A, K]
     ny = trailing(ok.astype(float))
