@@ -454,23 +454,36 @@ def test_per_step_tracking_is_the_within_window_correlation_of_the_steps():
     assert np.isnan(n_var_b[:, 0]).all() and np.isfinite(n_var_b[:, 1:]).all()
 
 
-def test_the_self_model_claim_reads_per_step_pairs_where_the_sweep_records_them():
+def _knows_late(name):
+    """Three runs of 24,000 steps whose self-models know nothing for the first third, then each
+    step's outcome, while every window's mean prediction stays the same."""
     rng = np.random.default_rng(7)
-    s = fake_sweep("multi_agent", 2, POLICIES, 1200, seeds=1)  # 24,000 steps, 3 runs
+    s = fake_sweep(name, 2, POLICIES, 1200, seeds=1, preset="multi_agent")
     shape = (3, 1200 * 20, 2)
     a = rng.integers(0, 7, shape)
     c = 0.6 + 0.1 * rng.normal(size=shape)
     q = 0.6 + 0.1 * rng.normal(size=shape)  # early: knows nothing
     q[:, 8000:] = c[:, 8000:] + 0.05 * rng.normal(size=(3, 16000, 2))  # later: knows each step's outcome
     _step_windows(s, 20, c, q, a)
-    # The window means alone hide it: every window's mean prediction is the same.
-    s.metrics["predicted"][:] = 0.6
-    r = cl.claim_self_model_predicts({"multi_agent": s})
-    assert "per-step pairs, correlated within 20-step windows" in r.statistic, r.statistic
+    s.metrics["predicted"][:] = 0.6  # the window means alone hide it
+    return s
+
+
+def test_the_self_model_claim_reads_per_step_pairs_where_the_sweep_records_them():
+    r = cl.claim_self_model_predicts({"multi_agent": _knows_late("multi_agent")})
+    assert r.statistic.startswith("multi_agent, runs: 3, per-step pairs, correlated within 20-step windows"), r.statistic
     assert r.verdict.startswith("holds"), r.verdict
     # late: corr = sd(c) / sd(q) = 0.1 / sqrt(0.1^2 + 0.05^2) per step
     assert r.values["z self late"] == pytest.approx(np.arctanh(0.1 / np.sqrt(0.0125)), abs=0.02)
     assert abs(r.values["z self early"]) < 0.05 and abs(r.values["z baseline late"]) < 0.05
+    # A preset sweep made before the window moments gives way to a side experiment that has them.
+    main = fake_sweep("multi_agent", 2, POLICIES, 1200, seeds=1)
+    for name in STEP_METRICS:
+        del main.metrics[name]
+    assert "20-step window means" in cl.claim_self_model_predicts({"multi_agent": main}).statistic
+    side = cl.claim_self_model_predicts({"multi_agent": main, "multi_agent.steps": _knows_late("multi_agent.steps")})
+    assert side.statistic.startswith("multi_agent.steps, runs: 3, per-step pairs"), side.statistic
+    assert side.values == r.values
 
 
 def test_observational_curiosity_on_planted_windows():

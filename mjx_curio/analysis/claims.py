@@ -742,7 +742,8 @@ def claim_self_model_predicts(presets: Mapping[str, Sweep]) -> ClaimResult:
     Where the sweep records each window's variances and covariance of the per-step predicted and
     obtained curiosity, and each action's mean curiosity (sweeps made since those metrics were
     added), the correlations are of per-step pairs, pooled within windows
-    (`self_model.step_tracking`); the rest of the test is the same. Older sweeps hold, per 20-step
+    (`self_model.step_tracking`); the rest of the test is the same. Read from multi_agent, or,
+    where that sweep lacks them, from the first side experiment of multi_agent that has them. Older sweeps hold, per 20-step
     window and agent, only the mean predicted curiosity of the actions taken (`predicted`), the
     mean obtained (`curiosity`) and the action counts. Measured per run of multi_agent and agent on these window means,
     each detrended by its own trailing moving average of 50 windows (the slow fall and rise would
@@ -760,6 +761,7 @@ def claim_self_model_predicts(presets: Mapping[str, Sweep]) -> ClaimResult:
     s = presets.get("multi_agent")
     if s is None:
         return ClaimResult(key, claim, evidence, "n/a", _missing(("multi_agent",), presets))
+    s = next((c for c in preset_and_sides(presets, "multi_agent") if records_steps(c)), s)
     per_step = records_steps(s)
     d = step_tracking(s) if per_step else self_model_tracking(s)
     early, late, base = mean_ci(d["self_early"]), mean_ci(d["self_late"]), mean_ci(d["base_late"])
