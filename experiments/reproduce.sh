@@ -56,7 +56,8 @@
 #     python -m mjx_curio.sweep preset=multi_agent seeds=3 steps=20000 checkpoint_every=1000 out=runs/paper/multi_agent.order
 #     python -m mjx_curio.sweep preset=multi_agent seeds=3 first_seed=3 steps=20000 checkpoint_every=1000 out=runs/paper/multi_agent.order.seeds-3-5
 # This script does not run it: a multi_agent sweep made now records the order itself, and claim
-# 6b reads that first.
+# 6b reads that first. Such a sweep also records the window moments with which claim 8 correlates
+# the self-model's predictions with the curiosity obtained step by step; the committed ones do not.
 #
 # The paper's full scale (8 seeds, 80,000 steps, every preset) is a GPU job: install the CUDA
 # extra (pip install -e '.[cuda]') and run
