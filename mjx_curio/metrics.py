@@ -50,7 +50,7 @@ SCHEMA: dict[str, Metric] = {
     "predicted": Metric("float32", A, "squared latent distance",
                         "self-model's predicted curiosity of the action taken, mean over the window, per agent"),
     # Within-window second moments of the per-step (predicted, obtained) pairs: the window means
-    # above cannot say whether the self-model tracks curiosity step by step, and these three give
+    # above cannot say whether the self-model tracks curiosity step by step, and these four give
     # the pooled within-window correlation without storing every step (analysis: claim 8).
     "predicted_var": Metric("float32", A, "(squared latent distance)^2",
                             "variance over the window's steps of the predicted curiosity of the action taken, per agent"),

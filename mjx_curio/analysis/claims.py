@@ -743,11 +743,12 @@ def claim_self_model_predicts(presets: Mapping[str, Sweep]) -> ClaimResult:
     obtained curiosity, and each action's mean curiosity (sweeps made since those metrics were
     added), the correlations are of per-step pairs, pooled within windows
     (`self_model.step_tracking`); the rest of the test is the same. Read from multi_agent, or,
-    where that sweep lacks them, from the first side experiment of multi_agent that has them. Older sweeps hold, per 20-step
-    window and agent, only the mean predicted curiosity of the actions taken (`predicted`), the
-    mean obtained (`curiosity`) and the action counts. Measured per run of multi_agent and agent on these window means,
-    each detrended by its own trailing moving average of 50 windows (the slow fall and rise would
-    otherwise make any two smooth curves correlate): r_self = corr(predicted, obtained) and
+    where that sweep lacks them, from the first side experiment of multi_agent that has them.
+    Older sweeps hold, per 20-step window and agent, only the mean predicted curiosity of the
+    actions taken (`predicted`), the mean obtained (`curiosity`) and the action counts. Measured
+    on them per run of multi_agent and agent, the window means each detrended by its own trailing
+    moving average of 50 windows (the slow fall and rise would otherwise make any two smooth
+    curves correlate): r_self = corr(predicted, obtained) and
     r_base = corr(baseline, obtained), where the baseline predicts a window's curiosity as its
     action shares times each action's running mean curiosity, estimated from the previous 50
     windows alone (ridge regression of window curiosity on action shares, shrunk towards their
