@@ -366,6 +366,8 @@ def test_every_figure_draws(sweep, single, tmp_path):
         lambda ax: an.plot_cumulative_interactions(sweep, ax, "agent"),
         lambda ax: an.plot_interaction_frequency(sweep, ax, "eps"),
         lambda ax: an.plot_action_histogram(sweep, ax, "boltzmann"),
+        lambda ax: an.plot_self_model_tracking(sweep, ax),
+        lambda ax: an.plot_self_model_tracking(single, ax),
         lambda ax: an.plot_view_fractions(sweep, ax, "ucb", agent=1),
         lambda ax: an.plot_observational(sweep, ax),
     ]

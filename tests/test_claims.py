@@ -454,6 +454,26 @@ def test_per_step_tracking_is_the_within_window_correlation_of_the_steps():
     assert np.isnan(n_var_b[:, 0]).all() and np.isfinite(n_var_b[:, 1:]).all()
 
 
+def test_tracking_over_time_pools_each_bin_of_steps():
+    rng = np.random.default_rng(8)
+    every, n_w = 10, 30
+    s = fake_sweep("multi_agent", 2, POLICIES, n_w, seeds=2, every=every)
+    shape = (6, n_w * every, 2)
+    a = rng.integers(0, 7, shape)
+    c = 0.5 + 0.1 * rng.normal(size=shape)
+    q = c * np.linspace(0, 1, n_w * every)[None, :, None] + 0.1 * rng.normal(size=shape)  # learns as it goes
+    _step_windows(s, every, c, q, a)
+    steps, r_self, r_base = an.tracking_over_time(s, "ucb", every=100)
+    assert steps.tolist() == [100, 200, 300] and r_self.shape == r_base.shape == (2, 3)
+    for k, i in enumerate(s.group("ucb").indices):
+        for b in range(3):
+            part = slice(b * 100, (b + 1) * 100)
+            want = np.tanh(np.mean([np.arctanh(_pooled_within(q[i, part, j], c[i, part, j], every)) for j in range(2)]))
+            assert r_self[k, b] == pytest.approx(want)
+    assert r_self[:, 0].mean() < 0.3 < 0.6 < r_self[:, 2].mean()
+    assert np.all(np.abs(r_base[:, 1:]) < 0.3)  # the action tells nothing of the curiosity here
+
+
 def _knows_late(name):
     """Three runs of 24,000 steps whose self-models know nothing for the first third, then each
     step's outcome, while every window's mean prediction stays the same."""

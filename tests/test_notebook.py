@@ -100,7 +100,7 @@ def test_notebook_runs(tiny_sweeps_dir, tmp_path):
     assert said.count("multi.seeds-2-3: no checkpoint") == 2, said
     for s, groups in slugs.items():
         expected |= {f"{s}-fig11-curiosity-policies", f"{s}-fig21-22-cumulative-interactions", f"{s}-fig10-actions",
-                     f"{s}-losses", f"{s}-turn-reversals"}
+                     f"{s}-losses", f"{s}-turn-reversals", f"{s}-self-model-tracking"}
         for g in groups:
             expected |= {f"{s}-fig08-curiosity-{g}", f"{s}-fig09-interactions-{g}", f"{s}-view-fractions-{g}"}
     assert expected == set(pngs), (sorted(expected - set(pngs)), sorted(set(pngs) - expected))

@@ -30,6 +30,7 @@ Figure) it is given and returning it:
     plot_observational             curiosity in windows where an agent only watches the other act
     plot_losses                    the world model's training losses
     plot_turn_reversals            trembling (section 5): turning back over time, against chance
+    plot_self_model_tracking       claim 8: the self-model's predictions against the curiosity obtained, per step
     headline_table                 mean +- sd across seeds per group of the key numbers
     temperature_table              per Boltzmann temperature: curiosity, action entropy, contacts;
                                    each tested across T, blocked by seed
@@ -119,6 +120,7 @@ from mjx_curio.analysis.claims import (
     self_model_tracking,
     watching_excess,
 )
+from mjx_curio.analysis.self_model import STEP_METRICS, records_steps, step_tracking, tracking_over_time
 from mjx_curio.analysis.significance import (
     betainc,
     block_anova,
@@ -147,6 +149,7 @@ from mjx_curio.analysis.figures import (
     plot_losses,
     plot_observational,
     plot_reconstructions,
+    plot_self_model_tracking,
     plot_single_vs_multi,
     plot_temperature_measures,
     plot_temperatures,
@@ -231,6 +234,8 @@ __all__ = [
     "WALLS_PAIRS", "walls_measures", "walls_table",
     # power
     "detectable", "noncentral_t_sf", "power_table", "seeds_needed", "t_power",
+    # self_model
+    "STEP_METRICS", "records_steps", "step_tracking", "tracking_over_time",
     # significance
     "betainc", "block_anova", "f_pvalue", "fisher_z", "one_way_anova", "pearson_r", "t_pvalue", "welch_t",
     # claims
@@ -246,6 +251,7 @@ __all__ = [
     "AGENT_COLORS", "CURIOSITY_LABEL", "FIGURES_DIRNAME", "POLICY_COLORS", "STEPS_LABEL", "TARGET_COLORS",
     "empty_axes", "figures_dir", "plot_action_histogram", "plot_boltzmann_greediness", "plot_cumulative_interactions",
     "plot_curiosity", "plot_curiosity_groups", "plot_interaction_frequency", "plot_losses", "plot_observational",
-    "plot_reconstructions", "plot_single_vs_multi", "plot_temperature_measures", "plot_temperatures",
-    "plot_turn_reversals", "plot_vae_single_vs_multi", "plot_view_fractions", "save_figure", "save_text", "slug",
+    "plot_reconstructions", "plot_self_model_tracking", "plot_single_vs_multi", "plot_temperature_measures",
+    "plot_temperatures", "plot_turn_reversals", "plot_vae_single_vs_multi", "plot_view_fractions", "save_figure",
+    "save_text", "slug",
 ]

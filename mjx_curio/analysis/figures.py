@@ -17,6 +17,7 @@ import numpy as np
 
 from mjx_curio.analysis.action_values import ActionValues, action_values
 from mjx_curio.analysis.recon import Reconstructions, reconstructions
+from mjx_curio.analysis.self_model import tracking_over_time
 from mjx_curio.analysis.stats import (
     OBS_CLASSES,
     action_totals,
@@ -348,6 +349,28 @@ def plot_turn_reversals(sweep: Sweep, axes, groups=None, every: int = 1000):
     _finish(axes[1], "Turning back beyond how often the agent turns", STEPS_LABEL,
             "reversals / reversals in a random order\nof each window's actions")
     return axes
+
+
+def plot_self_model_tracking(sweep: Sweep, ax, groups=None, every: int = 1000):
+    """Claim 8 over time, per group (mean over seeds, 95% band), in bins of `every` steps: the
+    correlation of each step's predicted curiosity (of the action taken) with the curiosity it
+    obtained, within 20-step windows (solid), and the same for a predictor that knows only each
+    action's running mean curiosity (dashed). Needs a sweep that records the window moments
+    (`self_model.records_steps`)."""
+    gs = _group_list(sweep, groups)
+    colors = _group_colors(gs)
+    for i, g in enumerate(gs):
+        steps, r_self, r_base = tracking_over_time(sweep, g, every)
+        marker = "." if len(steps) < 30 else None
+        for r, style, who in ((r_self, "-", "self-model"), (r_base, "--", "action running mean")):
+            mean, lo, hi, _ = mean_ci(r)
+            ax.plot(steps, mean, color=colors[i], linestyle=style, linewidth=1.5, marker=marker,
+                    label=f"{g.label}, {who}, {g.seeds_text}")
+            _band(ax, steps, lo, hi, colors[i])
+    ax.axhline(0, color="black", linestyle=":", linewidth=1)
+    _finish(ax, f"Does the self-model know what will surprise it? (per step, bins of {every} steps)", STEPS_LABEL,
+            "corr(predicted, obtained curiosity)\nwithin 20-step windows")
+    return ax
 
 
 def plot_reconstructions(sweep: Sweep, fig, run: int | str = 0, steps: Sequence[int] | None = None, n_frames: int = 8,

@@ -24,6 +24,7 @@ from __future__ import annotations
 import numpy as np
 
 from mjx_curio.analysis.significance import fisher_z
+from mjx_curio.analysis.stats import bin_windows
 from mjx_curio.analysis.sweeps import Sweep
 
 STEP_METRICS = ("predicted_var", "curiosity_var", "predicted_curiosity_cov", "curiosity_by_action")
@@ -68,10 +69,39 @@ def action_baseline_moments(counts, by_action, history: int, prior_weight: float
 def pooled_r(n_cov, n_var_x, n_var_y) -> np.ndarray:
     """The pooled within-window correlation over axis 1 ([R, W, A] -> [R, A]), from each window's
     n cov and n var (windows where any is not finite left out)."""
-    ok = np.isfinite(n_cov) & np.isfinite(n_var_x) & np.isfinite(n_var_y)
-    cov, vx, vy = (np.where(ok, v, 0.0).sum(axis=1) for v in (n_cov, n_var_x, n_var_y))
+    cov, vx, vy = (v.sum(axis=1) for v in _finite_windows(n_cov, n_var_x, n_var_y))
+    return _r(cov, vx, vy)
+
+
+def _finite_windows(*moments):
+    """The moments with every window where any of them is not finite set to 0 in all."""
+    ok = np.logical_and.reduce([np.isfinite(v) for v in moments])
+    return [np.where(ok, v, 0.0) for v in moments]
+
+
+def _r(cov, vx, vy):
     with np.errstate(invalid="ignore", divide="ignore"):
         return np.where((vx > 0) & (vy > 0), cov / np.sqrt(vx * vy), np.nan)
+
+
+def _agents_z(r):
+    """[R, A, ...] -> [R, ...]: the mean over agents on Fisher's z scale, NaN where none is finite."""
+    z = fisher_z(r)
+    ok = np.isfinite(z)
+    return np.where(ok.any(axis=1), np.where(ok, z, 0.0).sum(axis=1) / np.maximum(ok.sum(axis=1), 1), np.nan)
+
+
+def window_moments(sweep: Sweep, history: int = 50, prior_weight: float = 1.0) -> dict:
+    """Each window's n var and n cov [runs, windows, agents] of the predicted (q), obtained (c) and
+    baseline (b) curiosity: {"qc": (n cov(q, c), n var q, n var c), "bc": (n cov(b, c), n var b,
+    n var c)}, each triple with the windows where any is not finite set to 0."""
+    m = sweep.metrics
+    n = m["steps_taken"].astype(float)[..., None]  # [R, W, 1]: both agents step together
+    n_var_c = n * m["curiosity_var"].astype(float)
+    n_var_b, n_cov_bc = action_baseline_moments(m["action_counts"], m["curiosity_by_action"], history, prior_weight)
+    return {"qc": _finite_windows(n * m["predicted_curiosity_cov"].astype(float), n * m["predicted_var"].astype(float),
+                                  n_var_c),
+            "bc": _finite_windows(n_cov_bc, n_var_b, n_var_c)}
 
 
 def step_tracking(sweep: Sweep, history: int = 50, prior_weight: float = 1.0) -> dict:
@@ -80,26 +110,30 @@ def step_tracking(sweep: Sweep, history: int = 50, prior_weight: float = 1.0) ->
     correlations pooled within windows: self = corr(predicted, obtained), base = corr(the
     per-action running mean, obtained); early and late are the first and last third of the
     windows."""
-    m = sweep.metrics
-    n = m["steps_taken"].astype(float)[..., None]  # [R, W, 1]: both agents step together
-    n_var_q = n * m["predicted_var"].astype(float)
-    n_var_c = n * m["curiosity_var"].astype(float)
-    n_cov_qc = n * m["predicted_curiosity_cov"].astype(float)
-    n_var_b, n_cov_bc = action_baseline_moments(m["action_counts"], m["curiosity_by_action"], history, prior_weight)
-    n_w = n.shape[1]
+    mo = window_moments(sweep, history, prior_weight)
+    n_runs, n_w = sweep.metrics["steps_taken"].shape
     third = n_w // 3
     first, last = slice(0, third), slice(n_w - third, n_w)
-
-    def agents_z(r):  # [R, A] -> [R]: mean over agents on Fisher's z scale, NaN where none is finite
-        z = fisher_z(r)
-        ok = np.isfinite(z)
-        return np.where(ok.any(axis=1), np.where(ok, z, 0.0).sum(axis=1) / np.maximum(ok.sum(axis=1), 1), np.nan)
-
-    out = {k: np.full(n.shape[0], np.nan) for k in ("self_early", "self_late", "base_late")}
+    over = lambda triple, part: _agents_z(pooled_r(*(v[:, part] for v in triple)))  # noqa: E731
     if third >= 3:
-        out = {"self_early": agents_z(pooled_r(n_cov_qc[:, first], n_var_q[:, first], n_var_c[:, first])),
-               "self_late": agents_z(pooled_r(n_cov_qc[:, last], n_var_q[:, last], n_var_c[:, last])),
-               "base_late": agents_z(pooled_r(n_cov_bc[:, last], n_var_b[:, last], n_var_c[:, last]))}
+        out = {"self_early": over(mo["qc"], first), "self_late": over(mo["qc"], last), "base_late": over(mo["bc"], last)}
+    else:
+        out = {k: np.full(n_runs, np.nan) for k in ("self_early", "self_late", "base_late")}
     out["rise"] = out["self_late"] - out["self_early"]
     out["edge"] = out["self_late"] - out["base_late"]
     return out
+
+
+def tracking_over_time(sweep: Sweep, group=None, every: int = 1000, history: int = 50,
+                       prior_weight: float = 1.0) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """A group's per-step tracking over training, in bins of `every` agent steps (`bin_windows`):
+    (step at each bin's end [bins], corr(predicted, obtained) [runs of the group, bins], corr(the
+    per-action running mean, obtained) [runs, bins]), each pooled within the bin's windows and
+    averaged over agents on Fisher's z scale (then back to r)."""
+    g = sweep.group(group)
+    mo = window_moments(sweep, history, prior_weight)
+    curves = []
+    for triple in (mo["qc"], mo["bc"]):
+        steps, binned = bin_windows(sweep, np.stack([v[g.indices] for v in triple], axis=-1), every, reduce="sum")
+        curves.append(np.tanh(_agents_z(_r(binned[..., 0], binned[..., 1], binned[..., 2]).transpose(0, 2, 1))))
+    return steps, curves[0], curves[1]
