@@ -564,6 +564,15 @@ def _figures() -> tuple[Figure, ...]:
                "confidence bands. Paper: section 5 (videos only).",
                _one(lambda p, axes: an.plot_turn_reversals(p["multi_agent.order"], axes), size=(12, 3.8),
                     panels=2)),
+        Figure("multi_agent_self_model_tracking", ("multi_agent.per_step",),
+               "Does the self-model know what will surprise it (claim 8)? Two agents, from the side experiment that "
+               "records each window's moments of predicted and obtained curiosity (`multi_agent.per_step`: the "
+               "paper's settings, its own seeds and length). Solid: the correlation of each step's predicted "
+               "curiosity (of the action taken) with the curiosity obtained, within 20-step windows, pooled over "
+               "bins of 1,000 steps and averaged over both agents; dashed: the same for a predictor that knows only "
+               "each action's running mean curiosity over the previous 1,000 steps. x: agent steps. Means over "
+               "{seeds} seeds with 95 % confidence bands. Paper: sections 3.2 and 5 (no figure).",
+               _one(lambda p, ax: an.plot_self_model_tracking(p["multi_agent.per_step"], ax), size=(10, 3.8))),
         *_temperature_figures("boltzmann_temperatures", "Boltzmann temperatures T = 0.5 to 2.5", "0.5", "2.5",
                               curves="Paper: fig. 19.", actions="Paper: fig. 19 shows only curiosity."),
         *_temperature_figures("boltzmann_low_temperatures",

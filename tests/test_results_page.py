@@ -380,9 +380,10 @@ def test_page_blocks_on_the_tiny_sweeps(results, tiny_sweeps_dir, tmp_path):
     assert results.walls_block(presets).startswith("No walls-different sweep")
     presets["boltzmann_temperatures"] = presets["multi_agent_walls_different"] = presets["multi_agent"]
     presets["boltzmann_low_temperatures"] = presets["multi_agent.order"] = presets["multi_agent"]
+    presets["multi_agent.per_step"] = presets["multi_agent"]
     presets["single_agent_walls_different"] = presets["single_agent"]
     results.figures_block(presets, out=tmp_path / "all")
-    assert len(list((tmp_path / "all").glob("*.png"))) == len(results._figures()) == 17
+    assert len(list((tmp_path / "all").glob("*.png"))) == len(results._figures()) == 18
     temperatures = results.temperatures_block(presets)
     assert temperatures.count("| across T, blocked by seed |") == 2 and "`boltzmann_low_temperatures`:" in temperatures
     # With both, the test across all their temperatures (here one sweep standing for both: its own T).
