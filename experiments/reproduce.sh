@@ -57,7 +57,10 @@
 #     python -m mjx_curio.sweep preset=multi_agent seeds=3 first_seed=3 steps=20000 checkpoint_every=1000 out=runs/paper/multi_agent.order.seeds-3-5
 # This script does not run it: a multi_agent sweep made now records the order itself, and claim
 # 6b reads that first. Such a sweep also records the window moments with which claim 8 correlates
-# the self-model's predictions with the curiosity obtained step by step; the committed ones do not.
+# the self-model's predictions with the curiosity obtained step by step; the committed ones do not,
+# so claim 8 reads a second side experiment, 3 seeds x 20,000 steps (about 2 h 30 min alone on the
+# AMD EPYC above), which this script does not run either:
+#     python -m mjx_curio.sweep preset=multi_agent seeds=3 steps=20000 checkpoint_every=1000 out=runs/paper/multi_agent.per_step
 #
 # The paper's full scale (8 seeds, 80,000 steps, every preset) is a GPU job: install the CUDA
 # extra (pip install -e '.[cuda]') and run
