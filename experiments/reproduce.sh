@@ -61,6 +61,9 @@
 # so claim 8 reads a second side experiment, 3 seeds x 20,000 steps (about 2 h 30 min alone on the
 # AMD EPYC above), which this script does not run either:
 #     python -m mjx_curio.sweep preset=multi_agent seeds=3 steps=20000 checkpoint_every=1000 out=runs/paper/multi_agent.per_step
+#     python experiments/self_model_evidence.py runs/paper/multi_agent.per_step   # about 6 min beside a running sweep
+# (the second: how much of each step's curiosity is sampling noise that no self-model can foresee,
+# docs/results/self_model_noise.json, quoted under claim 8).
 #
 # The paper's full scale (8 seeds, 80,000 steps, every preset) is a GPU job: install the CUDA
 # extra (pip install -e '.[cuda]') and run
@@ -125,6 +128,10 @@ seed_parts multi_agent_walls_different "$WALL_STEPS" "$MULTI_WALL_SEEDS" multi_w
 # Figs. 7 (one agent) and 13 (one agent, every wall different), and the two-agent sweeps' VAEs.
 for part in "${single_parts[@]}" "${wall_parts[@]}" "${multi_parts[@]}" "${multi_wall_parts[@]}"; do
     "$PY" experiments/reconstruction_evidence.py "$part"  # each part keeps its own checkpoints
+done
+# Claim 8's ceiling: how much of each step's curiosity is noise no self-model can foresee.
+for part in "${multi_parts[@]}"; do
+    "$PY" experiments/self_model_evidence.py "$part"
 done
 "$PY" experiments/results.py snapshot runs/paper
 "$PY" experiments/results.py page

@@ -345,6 +345,62 @@ def test_action_values(sweep):
         sweep.restore_replay(200, keys=("pixels",))
 
 
+def test_curiosity_noise(sweep, monkeypatch):
+    """The closed-form mean and variance of a step's curiosity over the latent's sampling noise
+    against 20,000 draws through the sweep's own sampling and curiosity; the self-model's
+    prediction against `action_values`; the within-window shares and correlations against NumPy;
+    and a ring buffer whose head has moved round reads back in the same time order."""
+    import jax
+
+    from mjx_curio import world_model as wm
+
+    run = sweep.select(policy="ucb")[0]
+    cn = an.curiosity_noise(sweep, run, chunk=64)
+    assert cn.step == 200 and cn.expected.shape == cn.noise_var.shape == cn.predicted.shape == (199, 2)
+    assert (cn.noise_var > 0).all() and (cn.expected > 0).all()
+    v = an.action_values(sweep, run)
+    np.testing.assert_array_equal(cn.taken, v.taken[:199])
+    np.testing.assert_allclose(cn.predicted, np.take_along_axis(v.q[:199], cn.taken[..., None], -1)[..., 0],
+                               rtol=1e-4, atol=1e-5)
+
+    cfg, params = sweep.learner_config(), sweep.params(200, run)
+    rp = sweep.restore_replay(200, keys=("frames", "latents", "carry", "actions", "index", "size"))
+    k = 20_000
+    for t in (0, 57, 198):
+        c, h = rp["carry"]["0"][run, t], rp["carry"]["1"][run, t]
+        _, mix = wm.rnn_step(cfg, params["rnn"], (c, h), rp["latents"][run, t], rp["actions"][run, t])
+        mu, logvar = wm.encode(cfg, params["vae"], rp["frames"][run, t + 1])
+        z = jax.vmap(lambda key: wm.sample_latent(key, mu, logvar))(jax.random.split(jax.random.key(t), k))
+        draws = np.asarray(jax.vmap(lambda zi: wm.curiosity(cfg, zi, mix))(z), np.float64)  # [k, agents]
+        se = draws.std(axis=0) / np.sqrt(k)
+        assert (np.abs(draws.mean(axis=0) - cn.expected[t]) < 5 * se).all(), (t, draws.mean(0), cn.expected[t])
+        np.testing.assert_allclose(draws.var(axis=0), cn.noise_var[t], rtol=0.1)
+
+    e, q = cn.expected[:180].reshape(9, 20, 2), cn.predicted[:180].reshape(9, 20, 2)
+    within = e.var(axis=1).mean(axis=0)
+    noise = cn.noise_var[:180].mean(axis=0)
+    np.testing.assert_allclose(cn.noise_share(20), noise / (noise + within), rtol=1e-12)
+    np.testing.assert_allclose(cn.ceiling(20), np.sqrt(within / (noise + within)), rtol=1e-12)
+    ed, qd = (e - e.mean(1, keepdims=True)).reshape(-1, 2), (q - q.mean(1, keepdims=True)).reshape(-1, 2)
+    for agent in range(2):
+        r = np.corrcoef(qd[:, agent], ed[:, agent])[0, 1]
+        np.testing.assert_allclose(cn.tracking(20)["self"][agent], r, rtol=1e-9)
+        means = [cn.expected[cn.taken[:, agent] == i, agent].mean() for i in range(len(sweep.actions))]
+        assert cn.action_means()[5, agent] == pytest.approx(means[cn.taken[5, agent]], rel=1e-12)
+    with pytest.raises(ValueError, match="window=1: want a whole number of steps >= 2"):
+        cn.noise_share(1)
+
+    # The same buffer written from slot 430 on, its head gone round past the end to 130: the same steps.
+    shift, cap = 430, rp["actions"].shape[1]
+    rolled = jax.tree.map(lambda x: np.roll(x, shift, axis=1) if np.ndim(x) > 1 else x, rp)
+    rolled["index"] = (rp["index"] + shift) % cap
+    monkeypatch.setattr(type(sweep), "restore_replay", lambda self, step, keys=(): rolled)
+    again = an.curiosity_noise(sweep, run, chunk=64)
+    np.testing.assert_array_equal(again.taken, cn.taken)
+    np.testing.assert_array_equal(again.expected, cn.expected)
+    np.testing.assert_array_equal(again.predicted, cn.predicted)
+
+
 # ---------------------------------------------------------------------------------- figures
 
 

@@ -44,10 +44,11 @@ and the numbers behind them (`moving_average`, `mean_ci`, `cumulative_interactio
 orbax for checkpoints); plotting needs matplotlib.
 
 The package, by job; each module imports only those above it (sweeps none; stats, recon and
-action_values sweeps; tables sweeps and stats; significance none; claims significance, sweeps,
-stats and tables; temperatures claims, significance, stats and tables; power claims,
+action_values sweeps; curiosity_noise sweeps and action_values; tables sweeps and stats;
+significance none; self_model significance, stats and sweeps; claims self_model, significance,
+sweeps, stats and tables; temperatures claims, significance, stats and tables; power claims,
 significance and tables; walls claims, power, significance, stats, sweeps and tables; figures
-sweeps, stats, recon, action_values and temperatures):
+sweeps, stats, recon, action_values, self_model and temperatures):
 
     sweeps    loading: `load`, `find_sweeps`, `load_sweeps`, `merge_sweeps` (one experiment's seeds
               from several sweeps), `join_seed_parts` (every such experiment of a list merged),
@@ -65,10 +66,16 @@ sweeps, stats, recon, action_values and temperatures):
     action_values  what a run's self-models predict for every action on the states of its replay
               buffer, and the Boltzmann policy's probabilities there: `action_values` (JAX) and
               the `ActionValues` it returns
+    curiosity_noise  how much of each step's curiosity is the sampling noise of the latent, which
+              no self-model can foresee, and so the ceiling of a per-step test of it:
+              `curiosity_noise` (JAX) and the `CuriosityNoise` it returns
     tables    the headline table: `headline_table` and its `Table` (Markdown, CSV)
     significance  the tests, in NumPy alone: `welch_t`, `one_way_anova`, `block_anova`,
               `pearson_r`, `fisher_z`, and the t and F tails behind them (`t_pvalue`, `f_pvalue`,
               `betainc`)
+    self_model  does the self-model track the curiosity obtained step by step (claim 8): the
+              window moments sweeps record, pooled within windows (`step_tracking`,
+              `tracking_over_time`, `records_steps`, `STEP_METRICS`)
     claims    the paper's claims tested across seeds: `claims_table` (one row per claim: statistic,
               95% CI or p-value, verdict), a `claim_*` function per claim, and `assign_presets`
     temperatures  what a Boltzmann sweep's temperatures change, run by run: `temperature_table`
@@ -88,6 +95,7 @@ as before.
 from __future__ import annotations
 
 from mjx_curio.analysis.action_values import ActionValues, action_values
+from mjx_curio.analysis.curiosity_noise import CuriosityNoise, curiosity_noise
 from mjx_curio.analysis.claims import (
     CLAIMS,
     ClaimResult,
@@ -226,6 +234,8 @@ __all__ = [
     # recon, action_values
     "ReconstructionQuality", "Reconstructions", "heldout_slots", "reconstruction_quality", "reconstructions",
     "edge_error", "ActionValues", "action_values",
+    # curiosity_noise
+    "CuriosityNoise", "curiosity_noise",
     # tables
     "Table", "headline_table",
     # temperatures

@@ -59,18 +59,26 @@ def _predict(cfg):
     return jax.jit(jax.vmap(lambda params, z, h: wm.predict_curiosity(cfg, params, z, h), in_axes=(None, 0, 0)))
 
 
-def action_values(sweep: Sweep, run: int | str = 0, step: int | None = None) -> ActionValues:
-    """Run `run`'s self-models restored from checkpoint `step` (default: the newest that kept its
-    replay buffer), evaluated on every state in that buffer (its valid slots, oldest not first:
-    the buffer is a ring)."""
-    r = sweep.run(run)
+def replay_step(sweep: Sweep, step: int | None = None) -> int:
+    """`step` (default: the newest checkpoint that kept the replay buffers), checked to be a
+    checkpoint that kept them."""
     steps = sweep.replay_steps()
     if not steps:
         raise SweepError(f"{sweep.path} has no replay buffers in {sweep.checkpoints_dir / 'replay'} "
                          "(the sweep ran with save_replay=false, or has no checkpoint yet)")
     step = steps[-1] if step is None else int(step)
+    if step not in steps:
+        sweep.restore_replay(step)  # raises SweepError, naming the steps that kept them
+    return step
+
+
+def action_values(sweep: Sweep, run: int | str = 0, step: int | None = None) -> ActionValues:
+    """Run `run`'s self-models restored from checkpoint `step` (default: the newest that kept its
+    replay buffer), evaluated on every state in that buffer (its valid slots, oldest not first:
+    the buffer is a ring)."""
+    r = sweep.run(run)
+    step = replay_step(sweep, step)
     replay = sweep.restore_replay(step)
-    sweep.check_step(step)
     size = int(replay["size"][r.index])
     z = replay["latents"][r.index, :size]  # [N, agents, Z]
     h = replay["carry"]["1"][r.index, :size]  # [N, hidden]: the LSTM's h (carry is (c, h))

@@ -1,0 +1,87 @@
+"""How well could the self-model track each step's curiosity at all? (claim 8, step by step)
+
+    python experiments/self_model_evidence.py runs/paper/multi_agent.per_step
+
+At the sweep's newest checkpoint (the one that keeps the replay buffers), every run's networks
+are evaluated on every pair of consecutive steps in its replay buffer (`analysis.curiosity_noise`):
+the mean and variance of each step's curiosity over the sampling noise of the next latent, and
+the self-model's prediction for the action taken. Per run and agent, within 20-step windows (the
+sweep's): the share of the curiosity's variance that is that noise; the ceiling it puts on any
+prediction's correlation with the curiosity obtained, sqrt(1 - share); and how the self-model's
+prediction correlates with the part that could be foreseen (the mean over the noise), against the
+mean of each action over the buffer. From the metrics, the sweep's own per-step test over the
+last third of the run (`analysis.step_tracking`) beside it.
+
+Writes docs/results/self_model_noise.json (one entry per sweep and step, replacing an earlier
+entry of the same sweep and step) and prints a Markdown table, one row per policy.
+"""
+
+from __future__ import annotations
+
+import json
+import pathlib
+import sys
+
+import mjx_curio  # noqa: F401  (XLA flags before JAX initialises)
+
+import numpy as np
+
+OUT = pathlib.Path(__file__).resolve().parents[1] / "docs" / "results" / "self_model_noise.json"
+WINDOW = 20  # steps, the sweeps' metrics_every
+
+
+def run_figures(cn) -> dict:
+    """One run's figures, each a list over its agents."""
+    tr = cn.tracking(WINDOW)
+    return {"run": cn.run.name, "policy": cn.run.policy, "seed": cn.run.seed, "steps": int(cn.expected.shape[0]),
+            "curiosity_mean": cn.expected.mean(axis=0).tolist(),
+            "noise_share": cn.noise_share(WINDOW).tolist(), "ceiling": tr["ceiling"].tolist(),
+            "r_self_foreseeable": tr["self"].tolist(), "r_actions_foreseeable": tr["actions"].tolist()}
+
+
+def evidence(path: str) -> dict:
+    from mjx_curio import analysis as an
+
+    sweep = an.load(path)
+    noise = [an.curiosity_noise(sweep, i) for i in range(sweep.n_runs)]
+    step, runs = noise[0].step, [run_figures(cn) for cn in noise]
+    tracked = an.step_tracking(sweep) if an.records_steps(sweep) else None
+    for i, r in enumerate(runs):
+        r["r_self_obtained_late"] = float(np.tanh(tracked["self_late"][i])) if tracked is not None else None
+        r["r_actions_obtained_late"] = float(np.tanh(tracked["base_late"][i])) if tracked is not None else None
+    entry = {"sweep": sweep.name, "step": step, "window": WINDOW, "runs": runs}
+    saved = json.loads(OUT.read_text()) if OUT.exists() else []
+    saved = [e for e in saved if (e["sweep"], e["step"]) != (entry["sweep"], step)] + [entry]
+    OUT.parent.mkdir(parents=True, exist_ok=True)
+    OUT.write_text(json.dumps(sorted(saved, key=lambda e: (e["sweep"], e["step"])), indent=2) + "\n")
+    print(table(entry))
+    print(f"wrote {OUT}")
+    return entry
+
+
+def table(entry: dict) -> str:
+    """Markdown: per policy, the mean over its runs and agents of each figure (range over runs)."""
+    def cell(rows, key, fmt=".2f"):
+        per_run = [float(np.mean(r[key])) for r in rows if r[key] is not None]
+        if not per_run:
+            return "—"
+        return f"{np.mean(per_run):{fmt}} ({min(per_run):{fmt}}–{max(per_run):{fmt}})"
+
+    lines = [f"{entry['sweep']}, the replay buffers of step {entry['step']:,} (the last {entry['runs'][0]['steps'] + 1:,} "
+             f"steps of each run), {entry['window']}-step windows; mean over runs and agents (range over runs)",
+             "",
+             "| policy | runs | noise share | ceiling on r | r(self-model, foreseeable) | r(action means, foreseeable) "
+             "| r(self-model, obtained), last third | r(action running means, obtained), last third |",
+             "| --- | ---: | ---: | ---: | ---: | ---: | ---: | ---: |"]
+    for policy in dict.fromkeys(r["policy"] for r in entry["runs"]):
+        rows = [r for r in entry["runs"] if r["policy"] == policy]
+        lines.append(f"| {policy} | {len(rows)} | {cell(rows, 'noise_share')} | {cell(rows, 'ceiling')} "
+                     f"| {cell(rows, 'r_self_foreseeable', '.3f')} | {cell(rows, 'r_actions_foreseeable', '.3f')} "
+                     f"| {cell(rows, 'r_self_obtained_late', '.3f')} | {cell(rows, 'r_actions_obtained_late', '.3f')} |")
+    return "\n".join(lines)
+
+
+if __name__ == "__main__":
+    if len(sys.argv) != 2:
+        raise SystemExit(__doc__)
+    evidence(sys.argv[1])
