@@ -5,8 +5,9 @@
 At the sweep's newest checkpoint (the one that keeps the replay buffers), every run's networks
 are evaluated on every pair of consecutive steps in its replay buffer (`analysis.curiosity_noise`):
 the mean and variance of each step's curiosity over the sampling noise of the next latent, and
-the self-model's prediction for the action taken. Per run and agent, within 20-step windows (the
-sweep's): the share of the curiosity's variance that is that noise; the ceiling it puts on any
+the self-model's prediction for the action taken. Per run and agent: the mean curiosity and the
+share of it that the noise alone adds (mean_d sigma_d^2), and that part with the VAE of every
+kept checkpoint on the same views (`analysis.posterior_spread`); within 20-step windows (the sweep's): the share of the curiosity's variance that is that noise; the ceiling it puts on any
 prediction's correlation with the curiosity obtained, sqrt(1 - share); and how the self-model's
 prediction correlates with the part that could be foreseen (the mean over the noise), against the
 mean of each action over the buffer. From the metrics, the sweep's own per-step test over the
@@ -35,6 +36,7 @@ def run_figures(cn) -> dict:
     tr = cn.tracking(WINDOW)
     return {"run": cn.run.name, "policy": cn.run.policy, "seed": cn.run.seed, "steps": int(cn.expected.shape[0]),
             "curiosity_mean": cn.expected.mean(axis=0).tolist(),
+            "spread_share": (cn.spread.mean(axis=0) / cn.expected.mean(axis=0)).tolist(),
             "noise_share": cn.noise_share(WINDOW).tolist(), "ceiling": tr["ceiling"].tolist(),
             "r_self_foreseeable": tr["self"].tolist(), "r_actions_foreseeable": tr["actions"].tolist()}
 
@@ -45,6 +47,8 @@ def evidence(path: str) -> dict:
     sweep = an.load(path)
     noise = [an.curiosity_noise(sweep, i) for i in range(sweep.n_runs)]
     step, runs = noise[0].step, [run_figures(cn) for cn in noise]
+    for i, r in enumerate(runs):
+        r["spread_by_checkpoint"] = {str(k): v for k, v in an.posterior_spread(sweep, i).items()}
     tracked = an.step_tracking(sweep) if an.records_steps(sweep) else None
     for i, r in enumerate(runs):
         r["r_self_obtained_late"] = float(np.tanh(tracked["self_late"][i])) if tracked is not None else None
@@ -70,14 +74,24 @@ def table(entry: dict) -> str:
     lines = [f"{entry['sweep']}, the replay buffers of step {entry['step']:,} (the last {entry['runs'][0]['steps'] + 1:,} "
              f"steps of each run), {entry['window']}-step windows; mean over runs and agents (range over runs)",
              "",
-             "| policy | runs | noise share | ceiling on r | r(self-model, foreseeable) | r(action means, foreseeable) "
+             "| policy | runs | curiosity | from sigma^2 | noise share | ceiling on r | r(self-model, foreseeable) | r(action means, foreseeable) "
              "| r(self-model, obtained), last third | r(action running means, obtained), last third |",
-             "| --- | ---: | ---: | ---: | ---: | ---: | ---: | ---: |"]
+             "| --- | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: |"]
     for policy in dict.fromkeys(r["policy"] for r in entry["runs"]):
         rows = [r for r in entry["runs"] if r["policy"] == policy]
-        lines.append(f"| {policy} | {len(rows)} | {cell(rows, 'noise_share')} | {cell(rows, 'ceiling')} "
+        lines.append(f"| {policy} | {len(rows)} | {cell(rows, 'curiosity_mean', '.3f')} "
+                     f"| {cell(rows, 'spread_share')} | {cell(rows, 'noise_share')} | {cell(rows, 'ceiling')} "
                      f"| {cell(rows, 'r_self_foreseeable', '.3f')} | {cell(rows, 'r_actions_foreseeable', '.3f')} "
                      f"| {cell(rows, 'r_self_obtained_late', '.3f')} | {cell(rows, 'r_actions_obtained_late', '.3f')} |")
+    checkpoints = list(entry["runs"][0]["spread_by_checkpoint"])
+    lines += ["", "the part of the mean curiosity the noise alone adds (mean_d sigma_d^2), each checkpoint's VAE on "
+              "every 10th view of the same buffer; mean over runs (range over runs)", "",
+              "| policy | " + " | ".join(f"step {int(k):,}" for k in checkpoints) + " |",
+              "| --- |" + " ---: |" * len(checkpoints)]
+    for policy in dict.fromkeys(r["policy"] for r in entry["runs"]):
+        rows = [r for r in entry["runs"] if r["policy"] == policy]
+        vals = [[r["spread_by_checkpoint"][k] for r in rows] for k in checkpoints]
+        lines.append(f"| {policy} | " + " | ".join(f"{np.mean(v):.3f} ({min(v):.3f}–{max(v):.3f})" for v in vals) + " |")
     return "\n".join(lines)
 
 

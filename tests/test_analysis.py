@@ -357,7 +357,7 @@ def test_curiosity_noise(sweep, monkeypatch):
     run = sweep.select(policy="ucb")[0]
     cn = an.curiosity_noise(sweep, run, chunk=64)
     assert cn.step == 200 and cn.expected.shape == cn.noise_var.shape == cn.predicted.shape == (199, 2)
-    assert (cn.noise_var > 0).all() and (cn.expected > 0).all()
+    assert (cn.noise_var > 0).all() and (cn.expected > cn.spread).all() and (cn.spread > 0).all()
     v = an.action_values(sweep, run)
     np.testing.assert_array_equal(cn.taken, v.taken[:199])
     np.testing.assert_allclose(cn.predicted, np.take_along_axis(v.q[:199], cn.taken[..., None], -1)[..., 0],
@@ -375,6 +375,7 @@ def test_curiosity_noise(sweep, monkeypatch):
         se = draws.std(axis=0) / np.sqrt(k)
         assert (np.abs(draws.mean(axis=0) - cn.expected[t]) < 5 * se).all(), (t, draws.mean(0), cn.expected[t])
         np.testing.assert_allclose(draws.var(axis=0), cn.noise_var[t], rtol=0.1)
+        np.testing.assert_allclose(cn.spread[t], np.exp(np.asarray(logvar, np.float64)).mean(-1), rtol=1e-5)
 
     e, q = cn.expected[:180].reshape(9, 20, 2), cn.predicted[:180].reshape(9, 20, 2)
     within = e.var(axis=1).mean(axis=0)
@@ -390,6 +391,13 @@ def test_curiosity_noise(sweep, monkeypatch):
     with pytest.raises(ValueError, match="window=1: want a whole number of steps >= 2"):
         cn.noise_share(1)
 
+    # Over the buffer's 200 views: the 199 that follow a step, and the first.
+    spread = an.posterior_spread(sweep, run, every=1)
+    assert sorted(spread) == sweep.checkpoint_steps()
+    first = np.exp(np.asarray(wm.encode(cfg, params["vae"], rp["frames"][run, 0])[1], np.float64)).mean(-1)  # [agents]
+    np.testing.assert_allclose(spread[200] * 200 * 2, cn.spread.sum() + first.sum(), rtol=1e-5)
+    with pytest.raises(ValueError, match="every=0: want a whole number of views >= 1"):
+        an.posterior_spread(sweep, run, every=0)
     # The same buffer written from slot 430 on, its head gone round past the end to 130: the same steps.
     shift, cap = 430, rp["actions"].shape[1]
     rolled = jax.tree.map(lambda x: np.roll(x, shift, axis=1) if np.ndim(x) > 1 else x, rp)

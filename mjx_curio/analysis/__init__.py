@@ -68,7 +68,8 @@ sweeps, stats, recon, action_values, self_model and temperatures):
               the `ActionValues` it returns
     curiosity_noise  how much of each step's curiosity is the sampling noise of the latent, which
               no self-model can foresee, and so the ceiling of a per-step test of it:
-              `curiosity_noise` (JAX) and the `CuriosityNoise` it returns
+              `curiosity_noise` (JAX) and the `CuriosityNoise` it returns; `posterior_spread`,
+              the part of the curiosity the noise alone adds, at every kept checkpoint
     tables    the headline table: `headline_table` and its `Table` (Markdown, CSV)
     significance  the tests, in NumPy alone: `welch_t`, `one_way_anova`, `block_anova`,
               `pearson_r`, `fisher_z`, and the t and F tails behind them (`t_pvalue`, `f_pvalue`,
@@ -95,7 +96,7 @@ as before.
 from __future__ import annotations
 
 from mjx_curio.analysis.action_values import ActionValues, action_values
-from mjx_curio.analysis.curiosity_noise import CuriosityNoise, curiosity_noise
+from mjx_curio.analysis.curiosity_noise import CuriosityNoise, curiosity_noise, posterior_spread
 from mjx_curio.analysis.claims import (
     CLAIMS,
     ClaimResult,
@@ -235,7 +236,7 @@ __all__ = [
     "ReconstructionQuality", "Reconstructions", "heldout_slots", "reconstruction_quality", "reconstructions",
     "edge_error", "ActionValues", "action_values",
     # curiosity_noise
-    "CuriosityNoise", "curiosity_noise",
+    "CuriosityNoise", "curiosity_noise", "posterior_spread",
     # tables
     "Table", "headline_table",
     # temperatures

@@ -12,7 +12,10 @@ variance 4 a^2 sigma^2 + 2 sigma^4, and the dimensions are independent:
 
     E[c] = mean_d (a_d^2 + sigma_d^2),   Var[c] = sum_d (4 a_d^2 sigma_d^2 + 2 sigma_d^4) / D^2
 
-(without the 1/D and 1/D^2 for `curiosity=sum`; 0 for `z=mean`). Within windows of steps, the
+(without the 1/D and 1/D^2 for `curiosity=sum`; 0 for `z=mean`). Of E[c], mean_d sigma_d^2 comes
+from the noise alone: a latent dimension the VAE leaves unused (its posterior the prior, sigma = 1,
+mu = 0, which the MDN-RNN predicts exactly) still adds 1/D to the curiosity and 2/D^2 to its
+variance at every step. Within windows of steps, the
 variance of c is then the mean noise Var[c] plus the variance of E[c] across steps, and for any
 predictor f that knows only what the agent knew when it acted, corr(f, c) <= sd(E[c]) / sd(c) =
 sqrt(1 - noise share): the ceiling a per-step test of the self-model can reach.
@@ -44,6 +47,7 @@ class CuriosityNoise:
     step: int  # the checkpoint whose networks evaluated the buffer it kept
     expected: np.ndarray  # float [steps, agents]: E[c] over the latent's sampling noise
     noise_var: np.ndarray  # float [steps, agents]: Var[c] over that noise
+    spread: np.ndarray  # float [steps, agents]: mean_d sigma_d^2 (sum for curiosity=sum), E[c]'s part from the noise
     predicted: np.ndarray  # float [steps, agents]: the self-model's prediction for the action taken
     taken: np.ndarray  # int [steps, agents]: the action taken
 
@@ -110,12 +114,13 @@ def _evaluate(cfg):
         mu, logvar = wm.encode(cfg, params["vae"], next_frames)
         sq = jnp.square(mu - wm.mixture_mean(mix))
         var = jnp.exp(logvar) if cfg.z == "sample" else jnp.zeros_like(logvar)
-        expected, noise = jnp.sum(sq + var, -1), jnp.sum(4 * sq * var + 2 * var**2, -1)
+        spread, noise = jnp.sum(var, -1), jnp.sum(4 * sq * var + 2 * var**2, -1)
+        expected = jnp.sum(sq, -1) + spread
         d = cfg.latent
         if mean:
-            expected, noise = expected / d, noise / d**2
+            expected, noise, spread = expected / d, noise / d**2, spread / d
         q = wm.predict_curiosity(cfg, params["self_model"], z, h)
-        return expected, noise, jnp.take_along_axis(q, a[:, None], axis=1)[:, 0]
+        return expected, noise, spread, jnp.take_along_axis(q, a[:, None], axis=1)[:, 0]
 
     return jax.jit(jax.vmap(one, in_axes=(None, 0, 0, 0, 0, 0)))
 
@@ -144,5 +149,33 @@ def curiosity_noise(sweep: Sweep, run: int | str = 0, step: int | None = None, c
     now_p, nxt_p = np.concatenate([now, np.repeat(now[-1:], pad)]), np.concatenate([nxt, np.repeat(nxt[-1:], pad)])
     parts = [f(params, c[s], h[s], z[s], a[s], frames[nx])
              for s, nx in ((now_p[k:k + chunk], nxt_p[k:k + chunk]) for k in range(0, n + pad, chunk))]
-    expected, noise, predicted = (np.concatenate([np.asarray(p[j], np.float64) for p in parts])[:n] for j in range(3))
-    return CuriosityNoise(r, step, expected, noise, predicted, np.asarray(a[now]))
+    expected, noise, spread, predicted = (np.concatenate([np.asarray(p[j], np.float64) for p in parts])[:n]
+                                          for j in range(4))
+    return CuriosityNoise(r, step, expected, noise, spread, predicted, np.asarray(a[now]))
+
+
+@functools.lru_cache(maxsize=None)
+def _spread(cfg):
+    import jax
+    import jax.numpy as jnp
+
+    from mjx_curio import world_model as wm
+
+    d = cfg.latent if cfg.curiosity == "mean" else 1
+    return jax.jit(lambda vae, frames: jnp.sum(jnp.exp(wm.encode(cfg, vae, frames)[1]), -1) / d)
+
+
+def posterior_spread(sweep: Sweep, run: int | str = 0, steps=None, every: int = 10, step: int | None = None) -> dict:
+    """{checkpoint step: mean over views and agents of the posterior's mean_d sigma_d^2} for run
+    `run`'s VAE at each of `steps` (default: every kept checkpoint), on every `every`-th view of the
+    replay buffer kept at `step` (default: the newest): one set of views, so that only the encoder
+    differs. The part of the mean curiosity that the sampling noise alone adds, over training."""
+    if not (isinstance(every, (int, np.integer)) and every >= 1):
+        raise ValueError(f"every={every!r}: want a whole number of views >= 1")
+    r = sweep.run(run)
+    step = replay_step(sweep, step)
+    rp = sweep.restore_replay(step, keys=("frames", "size"))
+    frames = rp["frames"][r.index, :int(rp["size"][r.index]):every]
+    f = _spread(sweep.learner_config())
+    steps = sweep.checkpoint_steps() if steps is None else [sweep.check_step(s) for s in steps]
+    return {int(s): float(np.asarray(f(sweep.params(s, r.index)["vae"], frames), np.float64).mean()) for s in steps}
