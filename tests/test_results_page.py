@@ -475,7 +475,7 @@ def test_reproduce_run_lengths_per_sweep_and_steps_for_all(settings, want):
                       "runs/paper/multi_agent_walls_different.seeds-3-5"),
                      ("multi_agent_walls_different", "2", "6", str(want["multi_agent_walls_different"]),
                       "runs/paper/multi_agent_walls_different.seeds-6-7")]
-    # Then the evidence from their checkpoints, then the page.
+    # Then the evidence from their checkpoints (the self-model's from each two-agent part), then the page.
     evidence = re.findall(r"experiments/(\w+)_evidence\.py runs/paper/(\S+)", done.stdout)
     assert evidence == [("temperature", "boltzmann_temperatures"), ("temperature", "boltzmann_low_temperatures"),
                         ("reconstruction", "single_agent"), ("reconstruction", "single_agent.seeds-3-5"),
@@ -487,7 +487,9 @@ def test_reproduce_run_lengths_per_sweep_and_steps_for_all(settings, want):
                         ("reconstruction", "multi_agent.seeds-6-7"),
                         ("reconstruction", "multi_agent_walls_different"),
                         ("reconstruction", "multi_agent_walls_different.seeds-3-5"),
-                        ("reconstruction", "multi_agent_walls_different.seeds-6-7")]
+                        ("reconstruction", "multi_agent_walls_different.seeds-6-7"),
+                        ("self_model", "multi_agent"), ("self_model", "multi_agent.seeds-3-5"),
+                        ("self_model", "multi_agent.seeds-6-7")]
     assert done.stdout.rstrip().endswith("experiments/results.py check")
 
 
