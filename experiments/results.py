@@ -18,8 +18,9 @@ page's `multi_agent.order` records the order of actions, which claim 6b needs an
 (`mjx_curio.analysis.plot_*`) into docs/figures/results/, and rewrites the generated blocks of
 docs/results.md (between `<!-- generated: NAME -->` and `<!-- end: NAME -->`): the scale of the
 sweeps, the figures with their captions, the claims table (`analysis.claims_table`), the
-seeds each claim's tests need (`analysis.power_table`), the Boltzmann temperatures measure by
-measure (`analysis.temperature_table`), different walls against identical ones
+seeds each claim's tests need (`analysis.power_table`), claim 1's fall and rise taken apart
+into the world model's error and the posterior's spread (`analysis.curiosity_parts_table`), the
+Boltzmann temperatures measure by measure (`analysis.temperature_table`), different walls against identical ones
 (`analysis.walls_table`) and the reconstructions' quality over training (from
 docs/results/reconstructions.json, which `reconstruction_evidence.py` writes) and the sweeps
 of the paper's full length (from docs/results/full_length.json, which `full_length_evidence.py`
@@ -27,8 +28,9 @@ writes, with their figures); the rest
 of the page (what the verdicts mean, why a claim may fail here) is prose and stays as written.
 The claims' numbers also go to docs/results/claims.csv, the walls table's to docs/results/walls.csv.
 
-`check` recomputes the scale, claims, power, temperatures, walls, reconstructions and full-length blocks from the
-committed results and exits 1 if they differ from the page (the test suite does the same).
+`check` recomputes the scale, claims, power, curiosity parts, temperatures, walls, reconstructions
+and full-length blocks from the committed results and exits 1 if they differ from the page (the
+test suite does the same).
 """
 
 from __future__ import annotations
@@ -190,6 +192,17 @@ def temperatures_block(presets: dict) -> str:
         parts.append("The same measures for the three policies of the two-agent sweep (`multi_agent`), to set the "
                      f"temperatures beside them:\n\n{an.policy_measures_table(presets['multi_agent']).to_markdown()}")
     return "\n".join(parts)
+
+
+def curiosity_parts_block(presets: dict) -> str:
+    """Claim 1's fall and rise split into error and spread (`analysis.curiosity_parts_table`),
+    from the sweeps that record the spread."""
+    from mjx_curio import analysis as an
+
+    table = an.curiosity_parts_table(presets)
+    if not table.rows:
+        return "No sweep that records the posterior spread has been snapshotted yet.\n"
+    return table.to_markdown()
 
 
 def walls_block(presets: dict) -> str:
@@ -573,6 +586,15 @@ def _figures() -> tuple[Figure, ...]:
                "each action's running mean curiosity over the previous 1,000 steps. x: agent steps. Means over "
                "{seeds} seeds with 95 % confidence bands. Paper: sections 3.2 and 5 (no figure).",
                _one(lambda p, ax: an.plot_self_model_tracking(p["multi_agent.per_step"], ax), size=(10, 3.8))),
+        Figure("single_agent_curiosity_parts", ("single_agent.spread",),
+               "Claim 1's curve taken apart, one agent, ε-greedy, from the side experiment that records the "
+               "posterior spread (`single_agent.spread`: the paper's settings, its own seeds and length). Black: the "
+               "curiosity obtained; dashed purple: the spread of the VAE's posterior over the next view's latent, "
+               "the part of the curiosity's expectation no prediction removes; red: the rest, the MDN-RNN's error "
+               "against the posterior mean (curiosity minus spread). y: squared latent distance, unitless, moving "
+               "average over 1,000 steps; x: agent steps. Means over {seeds} seeds with 95 % confidence bands. Paper: "
+               "fig. 8 (the curiosity alone, one run).",
+               _one(lambda p, ax: an.plot_curiosity_parts(p["single_agent.spread"], ax, "eps"), size=(10, 3.8))),
         *_temperature_figures("boltzmann_temperatures", "Boltzmann temperatures T = 0.5 to 2.5", "0.5", "2.5",
                               curves="Paper: fig. 19.", actions="Paper: fig. 19 shows only curiosity."),
         *_temperature_figures("boltzmann_low_temperatures",
@@ -679,6 +701,7 @@ def computed_blocks(presets: dict) -> dict[str, str]:
     """The blocks that are pure functions of the committed results: the snapshots' metrics, and
     reconstructions.json for the reconstructions block (what `check` compares)."""
     return {"scale": scale_block(presets), "claims": claims_block(presets), "power": power_block(presets),
+            "curiosity_parts": curiosity_parts_block(presets),
             "temperatures": temperatures_block(presets), "walls": walls_block(presets),
             "reconstructions": reconstructions_block(), "full_length": full_length_block()}
 

@@ -47,6 +47,13 @@ SCHEMA: dict[str, Metric] = {
                         "window's steps, per agent"),
     "curiosity_sample": Metric("float32", A, "squared latent distance",
                                "curiosity reward at the window's last step (the paper's raw sample every 20 steps), per agent"),
+    # Curiosity's expectation over the latent's sampling noise is the MDN-RNN's error against the
+    # posterior mean plus this spread: curiosity minus it separates what learning can reduce.
+    "curiosity_spread": Metric("float32", A, "squared latent distance",
+                               "posterior variance sigma^2 of z_{t+1}, averaged (curiosity=mean) or summed "
+                               "(curiosity=sum) over the latent dimensions: the part of the curiosity's expectation "
+                               "over the latent's sampling noise that no prediction removes (0 under z=mean); mean "
+                               "over the window's steps, per agent"),
     "predicted": Metric("float32", A, "squared latent distance",
                         "self-model's predicted curiosity of the action taken, mean over the window, per agent"),
     # Within-window second moments of the per-step (predicted, obtained) pairs: the window means

@@ -118,10 +118,11 @@ def act(cfg: RunConfig, s: RunState) -> tuple[RunState, dict]:
     go = ~s.halted & ~diverged
     replay = replay_lib.add(s.replay, replay_lib.Transition(s.frames, s.z, a, s.carry), enabled=go)
     frames, geom_id = arena.render(env)
-    z = wm.latent(lc, s.learner.vae, frames, k_z)  # the next step's input and this step's target
+    z, spread = wm.latent_and_spread(lc, s.learner.vae, frames, k_z)  # the next step's input and this step's target
     reward = wm.curiosity(lc, z, mix)  # [n]
     metrics = {
         "curiosity": reward,
+        "curiosity_spread": spread,
         "predicted": jnp.take_along_axis(q, a[:, None], axis=1)[:, 0],
         "action": a,
         "contact_object": env.touch,
@@ -273,6 +274,7 @@ def reduce_windows(cfg: RunConfig, step_m: dict, learn_m: dict) -> dict:
         "rotation_reversals": count_reversals(a, ran),
         "curiosity": mean_steps(step_m["curiosity"]),
         "curiosity_sample": jnp.where(ran[:, -1][:, None], last(step_m["curiosity"]), jnp.nan),
+        "curiosity_spread": mean_steps(step_m["curiosity_spread"]),
         "predicted": mean_steps(step_m["predicted"]),
         "action_counts": counts,
         "contact_object": count_steps(step_m["contact_object"]),

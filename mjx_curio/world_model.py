@@ -177,8 +177,21 @@ def latent(cfg: LearnerConfig, vae_params, frames, key):
     [..., latent]: a reparameterised sample of the posterior q(z|o) = N(mu, sigma^2) drawn
     with `key` (cfg.z == "sample", the paper's z ~ q(z|o) and the authors' code), or its mean
     mu (cfg.z == "mean"; `key` unused)."""
+    return latent_and_spread(cfg, vae_params, frames, key)[0]
+
+
+def latent_and_spread(cfg: LearnerConfig, vae_params, frames, key):
+    """`latent`, and the posterior's variance sigma^2 reduced over the latent dimensions as
+    `curiosity` reduces them, [...]: 0 under z == "mean".
+
+    With z = mu + sigma * eps, the curiosity of this latent has the expectation over eps
+    ||mu - E[z_hat]||^2 + sum(sigma^2) (or both means over the dimensions): the spread is the part
+    no prediction can remove, so curiosity minus spread is, in expectation, the MDN-RNN's error
+    against the posterior mean."""
     mu, logvar = encode(cfg, vae_params, frames)
-    return sample_latent(key, mu, logvar) if cfg.z == "sample" else mu
+    if cfg.z != "sample":
+        return mu, jnp.zeros(mu.shape[:-1], mu.dtype)
+    return sample_latent(key, mu, logvar), _over_latent(cfg, jnp.exp(logvar))
 
 
 def rnn_step(cfg: LearnerConfig, rnn_params, carry: Carry, z, a):
@@ -240,8 +253,12 @@ def curiosity(cfg: LearnerConfig, z_next, mix: Mixture):
     """Eq. 3 per agent: the squared error between z_{t+1} and the MDN-RNN's expectation
     E[z_hat_{t+1}], shape [..., n_agents]: its mean over the latent dimensions (cfg.curiosity ==
     "mean", the authors' code: `mse_loss(...).mean(dim=1)`) or their sum, ||.||^2 ("sum")."""
-    sq = jnp.square(z_next - mixture_mean(mix))
-    return jnp.mean(sq, axis=-1) if cfg.curiosity == "mean" else jnp.sum(sq, axis=-1)
+    return _over_latent(cfg, jnp.square(z_next - mixture_mean(mix)))
+
+
+def _over_latent(cfg: LearnerConfig, x):
+    """Curiosity's reduction over the latent dimensions (the last axis): mean or sum."""
+    return jnp.mean(x, axis=-1) if cfg.curiosity == "mean" else jnp.sum(x, axis=-1)
 
 
 def vae_loss(cfg: LearnerConfig, vae_params, frames, key):

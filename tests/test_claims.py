@@ -342,6 +342,38 @@ def test_dip_and_rise_found_when_planted_not_in_noise():
     assert r.verdict.startswith("does not hold"), r.verdict
 
 
+def test_curiosity_parts_put_a_planted_rise_in_the_spread_not_the_error():
+    """Curiosity = error + spread with the error falling and flat after the trough and the
+    spread rising late: the parts' table gives the rise to the spread (share ~100 %, its CI above
+    0) and none to the error (its CI around 0), the fall to the error, and the curiosity's own
+    fall and rise as `curiosity_fall_rise` has them. A sweep made before sweeps recorded the
+    spread has no rows and no parts."""
+    rng = np.random.default_rng(3)
+    s = fake_sweep("single_agent.spread", 1, [("eps", 0.2)], 2000, seeds=6)  # 40,000 steps
+    steps = s.steps - 10
+    error = np.where(steps < 5_000, 0.6, 0.2)
+    spread = np.where(steps < 30_000, 0.3, 0.4)
+    noise = lambda: 0.02 * rng.normal(size=s.metrics["curiosity"].shape)  # noqa: E731
+    s.metrics["curiosity_spread"][:] = spread[None, :, None] + noise()
+    s.metrics["curiosity"][:] = s.metrics["curiosity_spread"] + error[None, :, None] + noise()
+    g = s.groups("eps")[0]
+    d = an.parts_fall_rise(s, g)
+    np.testing.assert_array_equal(d["curiosity"]["rise"], cl.curiosity_fall_rise(s, g)["rise"])
+    np.testing.assert_allclose(d["error"]["rise"], d["curiosity"]["rise"] - d["spread"]["rise"], atol=1e-12)
+    table = an.curiosity_parts_table({"single_agent.spread": s})
+    rows = {v["part"]: v for v in table.values}
+    assert list(rows) == list(an.PARTS) and [r[0] for r in table.rows] == ["`single_agent.spread`"] * 3
+    assert rows["curiosity"]["rise"] == pytest.approx(0.1, abs=0.01) and rows["spread"]["rise_low"] > 0.09
+    assert rows["spread"]["rise_share"] == pytest.approx(1.0, abs=0.1)
+    assert rows["error"]["rise_low"] < 0 < rows["error"]["rise_high"]
+    assert rows["error"]["fall"] == pytest.approx(0.4, abs=0.01) and rows["spread"]["fall_share"] == pytest.approx(0, abs=0.05)
+    assert rows["spread"]["early"] == pytest.approx(0.3, abs=0.01) and rows["spread"]["late"] == pytest.approx(0.4, abs=0.01)
+    del s.metrics["curiosity_spread"]
+    assert not an.records_spread(s) and an.curiosity_parts_table({"single_agent": s}).rows == []
+    with pytest.raises(ValueError, match="curiosity_spread"):
+        an.curiosity_parts(s, g)
+
+
 def test_two_agents_higher_compares_the_same_steps_when_one_sweep_is_longer():
     # Curiosity and loss drift upward with training alike for one and two agents; the two-agent
     # sweep ran 20,000 steps, the one-agent sweep 15,000. Only the common steps are comparable.

@@ -26,6 +26,7 @@ def _steps(rng):
         "action": rng.integers(0, len(ACTIONS), (t, AGENTS)).astype(np.int32),
         "curiosity": rng.gamma(2.0, 0.2, (t, AGENTS)).astype(np.float32),
         "predicted": rng.gamma(2.0, 0.2, (t, AGENTS)).astype(np.float32),
+        "curiosity_spread": rng.gamma(2.0, 0.1, (t, AGENTS)).astype(np.float32),
         "contact_object": rng.random((t, AGENTS, len(OBJECTS))) < 0.2,
         "contact_agent": rng.random((t, AGENTS)) < 0.1,
         "view_fraction": rng.random((t, AGENTS, len(metrics_lib.VIEW_TARGETS))).astype(np.float32),
@@ -34,6 +35,7 @@ def _steps(rng):
     }
     step_m["curiosity"][~taken] = np.nan
     step_m["predicted"][~taken] = np.nan
+    step_m["curiosity_spread"][~taken] = np.nan
     u = t // UPDATE_EVERY
     learn_m = {k: rng.random(u).astype(np.float32) for k in ("vae_loss", "recon", "kl", "nll", "self_loss")}
     learn_m["self_loss_agents"] = rng.random((u, AGENTS)).astype(np.float32)
@@ -74,6 +76,7 @@ def test_within_window_moments_and_curiosity_by_action_are_numpys(windows):
                 continue
             cw, qw = c[steps, i], q[steps, i]
             assert got["curiosity"][w, i] == pytest.approx(cw.mean(), rel=1e-6)
+            assert got["curiosity_spread"][w, i] == pytest.approx(step_m["curiosity_spread"][steps, i].mean(), rel=1e-6)
             assert got["predicted_var"][w, i] == pytest.approx(np.var(qw), rel=1e-4)
             assert got["curiosity_var"][w, i] == pytest.approx(np.var(cw), rel=1e-4)
             assert got["predicted_curiosity_cov"][w, i] == pytest.approx(np.cov(qw, cw, bias=True)[0, 1], rel=1e-4, abs=1e-7)

@@ -102,7 +102,8 @@ def test_notebook_runs(tiny_sweeps_dir, tmp_path):
         expected |= {f"{s}-fig11-curiosity-policies", f"{s}-fig21-22-cumulative-interactions", f"{s}-fig10-actions",
                      f"{s}-losses", f"{s}-turn-reversals", f"{s}-self-model-tracking"}
         for g in groups:
-            expected |= {f"{s}-fig08-curiosity-{g}", f"{s}-fig09-interactions-{g}", f"{s}-view-fractions-{g}"}
+            expected |= {f"{s}-fig08-curiosity-{g}", f"{s}-fig09-interactions-{g}", f"{s}-view-fractions-{g}",
+                         f"{s}-curiosity-parts-{g}"}
     assert expected == set(pngs), (sorted(expected - set(pngs)), sorted(set(pngs) - expected))
     for name, path in pngs.items():
         img = np.asarray(Image.open(path).convert("RGB"))

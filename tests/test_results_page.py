@@ -39,8 +39,8 @@ def test_the_page_is_what_the_committed_metrics_give(results):
     presets = results.load_presets()
     page = results.PAGE.read_text()
     blocks = results.blocks(page)
-    assert set(blocks) == {"scale", "figures", "claims", "power", "temperatures", "walls", "reconstructions",
-                           "full_length"}
+    assert set(blocks) == {"scale", "figures", "claims", "power", "curiosity_parts", "temperatures", "walls",
+                           "reconstructions", "full_length"}
     assert blocks["figures"] == results.figures_block(presets, out=None)
     if presets:  # the CSV's full-precision numbers may differ in the last bit on another CPU's NumPy
         _assert_same_csv(results.CLAIMS_CSV.read_text(), an.claims_table(presets).to_csv())
@@ -381,9 +381,15 @@ def test_page_blocks_on_the_tiny_sweeps(results, tiny_sweeps_dir, tmp_path):
     presets["boltzmann_temperatures"] = presets["multi_agent_walls_different"] = presets["multi_agent"]
     presets["boltzmann_low_temperatures"] = presets["multi_agent.order"] = presets["multi_agent"]
     presets["multi_agent.per_step"] = presets["multi_agent"]
-    presets["single_agent_walls_different"] = presets["single_agent"]
+    presets["single_agent_walls_different"] = presets["single_agent.spread"] = presets["single_agent"]
     results.figures_block(presets, out=tmp_path / "all")
-    assert len(list((tmp_path / "all").glob("*.png"))) == len(results._figures()) == 18
+    assert len(list((tmp_path / "all").glob("*.png"))) == len(results._figures()) == 19
+    # The tiny sweeps record the spread: claim 1's three parts per group of each preset they stand
+    # for; 200 steps fill the early block (steps 0-2k) alone.
+    parts = [r.split(" | ") for r in results.curiosity_parts_block(presets).splitlines()[2:] if r.startswith("| ")]
+    assert len(parts) == 3 * sum(len(s.groups()) for s in presets.values())
+    assert [r[3] for r in parts[:3]] == list(an.PARTS.values())
+    assert all(float(r[4]) > 0 and r[5:9] == ["n/a"] * 4 for r in parts if r[3] != "error against the posterior mean")
     temperatures = results.temperatures_block(presets)
     assert temperatures.count("| across T, blocked by seed |") == 2 and "`boltzmann_low_temperatures`:" in temperatures
     # With both, the test across all their temperatures (here one sweep standing for both: its own T).

@@ -404,6 +404,39 @@ def test_sampled_latents_are_draws_from_the_posterior():
     np.testing.assert_allclose(np.asarray(wm.latent(mean_cfg, st.vae, frames, keys[0])), mu, rtol=1e-6, atol=1e-7)
 
 
+def test_curiosity_spread_is_what_sampling_adds_to_the_curiositys_expectation():
+    """`latent_and_spread`: over N = 4,000 posterior draws, the mean curiosity against a fixed
+    prediction is ||mu - prediction||^2 plus the spread, reduced as curiosity reduces (mean or
+    sum over the dimensions); the spread is NumPy's sigma^2 reduced so, the latent is `latent`'s
+    draw for the same key, and z=mean has no spread. The z-score of the sample mean (its
+    standard error from the sample's own spread) stays within 6 for each of the 6 latents."""
+    frames = _frames(np.random.default_rng(1), (3, SMALL.n_agents), SMALL.image)
+    st = wm.init_learner(SMALL, jax.random.PRNGKey(7))
+    mu, logvar = (np.asarray(x, np.float64) for x in wm.encode(SMALL, st.vae, frames))
+    var = np.exp(logvar)
+    rng = np.random.default_rng(2)
+    shape = mu.shape + (2,)  # a two-component mixture whose mean is the prediction
+    mix = Mixture(jnp.full(shape, np.log(0.5), jnp.float32), jnp.asarray(mu[..., None] + rng.normal(size=shape), jnp.float32),
+                  jnp.zeros(shape, jnp.float32))
+    prediction = np.asarray(wm.mixture_mean(mix), np.float64)
+    keys = jax.random.split(jax.random.PRNGKey(8), 4000)
+    for reduce, cfg in ((np.mean, SMALL), (np.sum, dataclasses.replace(SMALL, curiosity="sum"))):
+        def draw(k, cfg=cfg):
+            z, spread = wm.latent_and_spread(cfg, st.vae, frames, k)
+            return z, spread, wm.curiosity(cfg, z, mix)
+
+        z, spread, cur = (np.asarray(x, np.float64) for x in jax.jit(jax.vmap(draw))(keys))
+        np.testing.assert_allclose(spread[0], reduce(var, axis=-1), rtol=1e-5)
+        np.testing.assert_array_equal(spread[0], spread[1])  # sigma^2 does not depend on the draw
+        np.testing.assert_allclose(z[0], np.asarray(wm.latent(cfg, st.vae, frames, keys[0])), rtol=1e-5, atol=1e-6)
+        expected = reduce(np.square(mu - prediction), axis=-1) + spread[0]
+        z_score = (cur.mean(0) - expected) / (cur.std(0) / np.sqrt(len(keys)))
+        assert np.abs(z_score).max() < 6, z_score
+    z, spread = wm.latent_and_spread(dataclasses.replace(SMALL, z="mean"), st.vae, frames, keys[0])
+    np.testing.assert_allclose(np.asarray(z), mu, rtol=1e-6, atol=1e-7)
+    assert np.all(np.asarray(spread) == 0) and spread.shape == mu.shape[:-1]
+
+
 def test_rnn_sequence_equals_repeated_single_steps():
     cfg = SMALL
     st = wm.init_learner(cfg, jax.random.PRNGKey(4))
@@ -493,7 +526,8 @@ def test_acting_and_learning_use_posterior_samples_from_the_run_key():
     """act and learn with z=sample: the latent of the new view (the next step's self-model and
     memory input, and this step's curiosity target) is a posterior draw with the noise of the
     step key's third split; learn re-encodes the current view with the updated VAE and the
-    fourth split; the curiosity is the mean squared error over the latent dimensions."""
+    fourth split; the curiosity is the mean squared error over the latent dimensions, and its
+    spread the mean posterior variance of the new view."""
     from mjx_curio import policies
     from mjx_curio import run as run_lib
 
@@ -510,6 +544,9 @@ def test_acting_and_learning_use_posterior_samples_from_the_run_key():
     _, mix = wm.rnn_step(lc, before.learner.rnn, before.carry, before.z, m["action"])
     mean_sq = np.mean(np.square(expected - np.asarray(wm.mixture_mean(mix))), axis=-1)
     np.testing.assert_allclose(np.asarray(m["curiosity"]), mean_sq, rtol=1e-4, atol=1e-6)
+    _, logvar = wm.encode(lc, s.learner.vae, s.frames)
+    np.testing.assert_allclose(np.asarray(m["curiosity_spread"]), np.mean(np.exp(np.asarray(logvar)), axis=-1),
+                               rtol=1e-5)
 
     learned, lm = jax.jit(lambda s: run_lib.learn(cfg, s))(s)
     assert int(lm["updated"]) == 1

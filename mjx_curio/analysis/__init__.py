@@ -31,6 +31,7 @@ Figure) it is given and returning it:
     plot_losses                    the world model's training losses
     plot_turn_reversals            trembling (section 5): turning back over time, against chance
     plot_self_model_tracking       claim 8: the self-model's predictions against the curiosity obtained, per step
+    plot_curiosity_parts           claim 1's curve taken apart: the error against the posterior mean and its spread
     headline_table                 mean +- sd across seeds per group of the key numbers
     temperature_table              per Boltzmann temperature: curiosity, action entropy, contacts;
                                    each tested across T, blocked by seed
@@ -46,9 +47,10 @@ orbax for checkpoints); plotting needs matplotlib.
 The package, by job; each module imports only those above it (sweeps none; stats, recon and
 action_values sweeps; curiosity_noise sweeps and action_values; tables sweeps and stats;
 significance none; self_model significance, stats and sweeps; claims self_model, significance,
-sweeps, stats and tables; temperatures claims, significance, stats and tables; power claims,
-significance and tables; walls claims, power, significance, stats, sweeps and tables; figures
-sweeps, stats, recon, action_values, self_model and temperatures):
+sweeps, stats and tables; curiosity_parts claims, stats, sweeps and tables; temperatures claims,
+significance, stats and tables; power claims, significance and tables; walls claims, power,
+significance, stats, sweeps and tables; figures sweeps, stats, recon, action_values,
+curiosity_parts, self_model and temperatures):
 
     sweeps    loading: `load`, `find_sweeps`, `load_sweeps`, `merge_sweeps` (one experiment's seeds
               from several sweeps), `join_seed_parts` (every such experiment of a list merged),
@@ -84,6 +86,9 @@ sweeps, stats, recon, action_values, self_model and temperatures):
               policy
     power     how many seeds each claim's tests need and the smallest effect they detect:
               `power_table`, and `seeds_needed`, `detectable`, `t_power`, `noncentral_t_sf` behind it
+    curiosity_parts  claim 1's fall and rise split into the world model's error against the posterior
+              mean and the posterior's spread, from sweeps that record the spread:
+              `curiosity_parts_table`, `parts_fall_rise`, `curiosity_parts`, `records_spread`
     walls     what a different texture on every wall changes: `walls_table` (each walls-different
               preset against its identical-walls preset, per policy) and `walls_measures`
     figures   every `plot_*` function, the colours and labels they share, and saving
@@ -119,6 +124,7 @@ from mjx_curio.analysis.claims import (
     claim_two_agents_higher,
     claims_table,
     curiosity_fall_rise,
+    fall_rise,
     late_curiosity,
     moving_object_shares,
     reversal_rate,
@@ -128,6 +134,13 @@ from mjx_curio.analysis.claims import (
     seed_coupling,
     self_model_tracking,
     watching_excess,
+)
+from mjx_curio.analysis.curiosity_parts import (
+    PARTS,
+    curiosity_parts,
+    curiosity_parts_table,
+    parts_fall_rise,
+    records_spread,
 )
 from mjx_curio.analysis.self_model import STEP_METRICS, records_steps, step_tracking, tracking_over_time
 from mjx_curio.analysis.significance import (
@@ -154,6 +167,7 @@ from mjx_curio.analysis.figures import (
     plot_cumulative_interactions,
     plot_curiosity,
     plot_curiosity_groups,
+    plot_curiosity_parts,
     plot_interaction_frequency,
     plot_losses,
     plot_observational,
@@ -237,6 +251,8 @@ __all__ = [
     "edge_error", "ActionValues", "action_values",
     # curiosity_noise
     "CuriosityNoise", "curiosity_noise", "posterior_spread",
+    # curiosity_parts
+    "PARTS", "curiosity_parts", "curiosity_parts_table", "parts_fall_rise", "records_spread",
     # tables
     "Table", "headline_table",
     # temperatures
@@ -254,14 +270,14 @@ __all__ = [
     "balanced_rotation_share", "claim_agents_move_together", "claim_boltzmann_trembles",
     "claim_contact_ranking", "claim_curiosity_dip_and_rise", "claim_observational_curiosity",
     "claim_prefers_moving_objects", "claim_self_model_predicts", "claim_stop_least", "claim_temperatures_alike",
-    "claim_two_agents_higher", "claim_results", "claims_table", "curiosity_fall_rise",
+    "claim_two_agents_higher", "claim_results", "claims_table", "curiosity_fall_rise", "fall_rise",
     "late_curiosity", "moving_object_shares", "reversal_rate",
     "reversals_against_shuffled", "rotation_share", "running_action_baseline", "seed_coupling",
     "self_model_tracking", "watching_excess",
     # figures
     "AGENT_COLORS", "CURIOSITY_LABEL", "FIGURES_DIRNAME", "POLICY_COLORS", "STEPS_LABEL", "TARGET_COLORS",
     "empty_axes", "figures_dir", "plot_action_histogram", "plot_boltzmann_greediness", "plot_cumulative_interactions",
-    "plot_curiosity", "plot_curiosity_groups", "plot_interaction_frequency", "plot_losses", "plot_observational",
+    "plot_curiosity", "plot_curiosity_groups", "plot_curiosity_parts", "plot_interaction_frequency", "plot_losses", "plot_observational",
     "plot_reconstructions", "plot_self_model_tracking", "plot_single_vs_multi", "plot_temperature_measures",
     "plot_temperatures", "plot_turn_reversals", "plot_vae_single_vs_multi", "plot_view_fractions", "save_figure",
     "save_text", "slug",

@@ -246,7 +246,11 @@ def claim_curiosity_dip_and_rise(presets: Mapping[str, Sweep]) -> ClaimResult:
 def curiosity_fall_rise(sweep: Sweep, group: Group) -> dict:
     """Per run of `group`: {"early", "trough", "late", "fall", "rise"} (arrays [runs]); the blocks
     of `claim_curiosity_dip_and_rise`, NaN where a block holds no window."""
-    c = _nanmean(sweep.metrics["curiosity"][group.indices].astype(float), axis=2)  # [n, W]
+    return fall_rise(sweep, _nanmean(sweep.metrics["curiosity"][group.indices].astype(float), axis=2))
+
+
+def fall_rise(sweep: Sweep, c: np.ndarray) -> dict:
+    """`curiosity_fall_rise` of any per-run series c [runs, windows] of `sweep`."""
     t = sweep.steps_done
     early = _block_mean(sweep, c, 0, 2_000)
     trough = _block_mean(sweep, c, 10_000, 30_000)

@@ -16,6 +16,7 @@ from typing import Any, Iterable, Sequence
 import numpy as np
 
 from mjx_curio.analysis.action_values import ActionValues, action_values
+from mjx_curio.analysis.curiosity_parts import PARTS, curiosity_parts
 from mjx_curio.analysis.recon import Reconstructions, reconstructions
 from mjx_curio.analysis.self_model import tracking_over_time
 from mjx_curio.analysis.stats import (
@@ -371,6 +372,24 @@ def plot_self_model_tracking(sweep: Sweep, ax, groups=None, every: int = 1000):
     _finish(ax, f"Does the self-model know what will surprise it? (per step, bins of {every} steps)", STEPS_LABEL,
             "corr(predicted, obtained curiosity)\nwithin 20-step windows")
     return ax
+
+
+def plot_curiosity_parts(sweep: Sweep, ax, group: Any = None, window: int = 50):
+    """Claim 1's curve taken apart (`curiosity_parts`), one group, the agents' mean: the curiosity
+    obtained, the posterior spread (the part no prediction removes) and the error against the
+    posterior mean (the rest), each a trailing moving average over `window` points, mean over
+    seeds with 95% bands. Needs a sweep that records the spread (`records_spread`)."""
+    g = sweep.group(group)
+    x = sweep.steps
+    styles = {"curiosity": ("black", "-"), "spread": ("tab:purple", "--"), "error": ("tab:red", "-")}
+    for part, v in curiosity_parts(sweep, g).items():
+        color, style = styles[part]
+        mean, lo, hi, _ = mean_ci(moving_average(v, window, axis=1))
+        ax.plot(x, mean, color=color, linestyle=style, linewidth=2 if part != "spread" else 1.5,
+                label=f"{PARTS[part]}, {g.seeds_text}")
+        _band(ax, x, lo, hi, color)
+    who = "mean of both agents" if sweep.n_agents > 1 else "single agent"
+    return _finish(ax, f"Curiosity = error + posterior spread, {who}: {g.label}", STEPS_LABEL, CURIOSITY_LABEL)
 
 
 def plot_reconstructions(sweep: Sweep, fig, run: int | str = 0, steps: Sequence[int] | None = None, n_frames: int = 8,

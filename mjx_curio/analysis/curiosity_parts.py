@@ -1,0 +1,103 @@
+"""What claim 1's fall and rise are made of: the world model's error, or the posterior's spread.
+
+The curiosity of a step is r = ||z_{t+1} - E[z_hat_{t+1}]||^2 (mean over the latent dimensions),
+with z_{t+1} = mu + sigma * eps drawn from the VAE's posterior. Over the draw eps its expectation
+is ||mu - E[z_hat_{t+1}]||^2 + mean(sigma^2): the MDN-RNN's error against the posterior mean,
+which learning can reduce, plus the posterior's own variance, which no prediction removes. A
+sweep that records `curiosity_spread` (the second term, a window mean per agent) gives the first
+window by window as curiosity minus spread: unbiased, its noise averaged over a window's steps,
+and over claim 1's blocks of thousands of steps. If the rise of curiosity late in a run is the
+spread's, the world model is not growing more surprised; its VAE is growing less sure.
+"""
+
+from __future__ import annotations
+
+import warnings
+from typing import Mapping
+
+import numpy as np
+
+from mjx_curio.analysis.claims import fall_rise
+from mjx_curio.analysis.stats import mean_ci
+from mjx_curio.analysis.sweeps import Group, Sweep
+from mjx_curio.analysis.tables import Table
+
+SPREAD = "curiosity_spread"
+# The parts, in the order tables and figures show them: the whole, the part learning cannot
+# remove, and the part it can.
+PARTS = {"curiosity": "curiosity obtained", "spread": "posterior spread", "error": "error against the posterior mean"}
+
+
+def records_spread(sweep: Sweep) -> bool:
+    """Whether `sweep` recorded each window's posterior spread (sweeps made before it did not)."""
+    return SPREAD in sweep.metrics
+
+
+def curiosity_parts(sweep: Sweep, group: Group) -> dict[str, np.ndarray]:
+    """Per run of `group` and window, the agents' mean of each part of `PARTS`: {part: [runs, windows]}."""
+    if not records_spread(sweep):
+        raise ValueError(f"{sweep.name} does not record {SPREAD} (made before sweeps recorded it)")
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", RuntimeWarning)
+        c = np.nanmean(sweep.metrics["curiosity"][group.indices].astype(float), axis=2)
+        s = np.nanmean(sweep.metrics[SPREAD][group.indices].astype(float), axis=2)
+    return {"curiosity": c, "spread": s, "error": c - s}
+
+
+def parts_fall_rise(sweep: Sweep, group: Group) -> dict[str, dict]:
+    """Claim 1's blocks of each part (`claims.fall_rise`): {part: {"early", "trough", "late",
+    "fall", "rise"}}, arrays over the group's runs. The error's fall and rise are the curiosity's
+    minus the spread's, run by run."""
+    return {part: fall_rise(sweep, x) for part, x in curiosity_parts(sweep, group).items()}
+
+
+def curiosity_parts_table(presets: Mapping[str, Sweep]) -> Table:
+    """Per sweep that records the spread and per group of it: each part's means over claim 1's
+    blocks (steps 0-2,000, 10,000-30,000, the last 10,000), its fall and rise with their 95 % CIs
+    over runs, and its share of the curiosity's mean fall and rise."""
+    cols = ["sweep", "group", "runs", "part", "steps 0-2k", "steps 10k-30k", "last 10k steps", "fall [95 % CI]",
+            "rise [95 % CI]", "share of the fall", "share of the rise"]
+    rows, values = [], []
+    for name, s in presets.items():
+        if not records_spread(s):
+            continue
+        for g in s.groups():
+            d = parts_fall_rise(s, g)
+            whole = {k: _mean(d["curiosity"][k]) for k in ("fall", "rise")}
+            for part, what in PARTS.items():
+                x = d[part]
+                block = {k: _mean(x[k]) for k in ("early", "trough", "late")}
+                fall, rise = mean_ci(x["fall"]), mean_ci(x["rise"])
+                share = {k: _mean(x[k]) / whole[k] if np.isfinite(whole[k]) and whole[k] != 0 else float("nan")
+                         for k in ("fall", "rise")}
+                rows.append([f"`{name}`", g.label, str(g.n), what, *(_f(block[k]) for k in ("early", "trough", "late")),
+                             _ci(fall), _ci(rise), _pct(share["fall"]), _pct(share["rise"])])
+                values.append({"sweep": name, "group": g.label, "runs": g.n, "part": part, **block,
+                               "fall": float(fall[0]), "fall_low": float(fall[1]), "fall_high": float(fall[2]),
+                               "rise": float(rise[0]), "rise_low": float(rise[1]), "rise_high": float(rise[2]),
+                               "fall_share": share["fall"], "rise_share": share["rise"]})
+    note = ("Curiosity (mean of the agents) = error against the posterior mean + posterior spread, in expectation "
+            "over the latent's sampling noise; the spread is recorded, the error is curiosity minus spread. "
+            "fall = steps 0-2k minus 10k-30k, rise = last 10k minus 10k-30k (claim 1's blocks), per run; "
+            "mean over runs [95 % CI]. Share: the part's mean over the curiosity's.")
+    return Table(cols, rows, values, note if rows else "")
+
+
+def _mean(x: np.ndarray) -> float:
+    """The mean over runs, NaN where no run has a value (a block the sweep has not reached)."""
+    return float(np.nanmean(x)) if np.isfinite(x).any() else float("nan")
+
+
+def _f(x: float) -> str:
+    return f"{x:.3f}" if np.isfinite(x) else "n/a"
+
+
+def _pct(x: float) -> str:
+    return f"{100 * x:.0f} %" if np.isfinite(x) else "n/a"
+
+
+def _ci(m) -> str:
+    mean, lo, hi, _ = (float(v) for v in m)
+    if not np.isfinite(mean):
+        return "n/a"
+    return f"{mean:.3f} [{lo:.3f}, {hi:.3f}]" if np.isfinite(lo) else f"{mean:.3f}"
