@@ -64,6 +64,13 @@
 #     python experiments/self_model_evidence.py runs/paper/multi_agent.per_step   # about 6 min beside a running sweep
 # (the second: how much of each step's curiosity is sampling noise that no self-model can foresee,
 # docs/results/self_model_noise.json, quoted under claim 8).
+# Claim 1's fall and rise are taken apart into the world model's error and the posterior's spread
+# on a third side experiment, one agent under epsilon-greedy (fig. 8's setting), which records the
+# spread (every sweep made now does; the committed presets ran before), not run by this script:
+#     python -m mjx_curio.sweep preset=single_agent policies=eps seeds=4 steps=40000 checkpoint_every=1000 out=runs/paper/single_agent.spread
+#     python experiments/spread_evidence.py runs/paper/single_agent.spread   # and on multi_agent.per_step
+# (the second: each latent dimension's posterior variance at every kept checkpoint,
+# docs/results/posterior_dims.json, shown under claim 1's parts).
 #
 # The paper's full scale (8 seeds, 80,000 steps, every preset) is a GPU job: install the CUDA
 # extra (pip install -e '.[cuda]') and run

@@ -53,6 +53,7 @@ CLAIMS_CSV = ROOT / "docs" / "results" / "claims.csv"
 WALLS_CSV = ROOT / "docs" / "results" / "walls.csv"
 RECONSTRUCTIONS = ROOT / "docs" / "results" / "reconstructions.json"  # reconstruction_evidence.py writes it
 FULL_LENGTH = ROOT / "docs" / "results" / "full_length.json"  # full_length_evidence.py writes it
+POSTERIOR_DIMS = ROOT / "docs" / "results" / "posterior_dims.json"  # spread_evidence.py writes it
 SNAPSHOT_FILES = ("manifest.json", "progress.json")  # plus metrics/*.npy
 DPI = 80
 
@@ -194,15 +195,40 @@ def temperatures_block(presets: dict) -> str:
     return "\n".join(parts)
 
 
-def curiosity_parts_block(presets: dict) -> str:
+def curiosity_parts_block(presets: dict, dims: pathlib.Path = POSTERIOR_DIMS) -> str:
     """Claim 1's fall and rise split into error and spread (`analysis.curiosity_parts_table`),
-    from the sweeps that record the spread."""
+    from the sweeps that record the spread; then, from posterior_dims.json, each sweep's spread
+    and latent dimensions near the prior checkpoint by checkpoint (`posterior_dims_table`)."""
     from mjx_curio import analysis as an
 
     table = an.curiosity_parts_table(presets)
-    if not table.rows:
-        return "No sweep that records the posterior spread has been snapshotted yet.\n"
-    return table.to_markdown()
+    parts = [table.to_markdown() if table.rows else "No sweep that records the posterior spread has been snapshotted yet.\n"]
+    if dims.exists():
+        parts += [posterior_dims_table(e) for e in json.loads(dims.read_text())]
+    return "\n".join(parts)
+
+
+def posterior_dims_table(entry: dict) -> str:
+    """Markdown: per group and checkpoint, the mean over its runs (range over runs) of the spread
+    and of the dimensions near the prior."""
+    checkpoints = list(entry["runs"][0]["by_checkpoint"])
+    lines = [f"`{entry['sweep']}`: each checkpoint's VAE on every {entry['every']}th view of the replay buffer kept "
+             f"at step {entry['replay_step']:,}; per checkpoint, the posterior spread (mean over views and the "
+             f"{entry['latent']} dimensions of sigma²) and the dimensions whose mean sigma² exceeds "
+             f"{entry['near_prior']:g} (mostly noise, nearer the prior's 1 than a precise code); mean over runs "
+             "(range over runs).", "",
+             "| group | runs | " + " | ".join(f"step {int(k):,}" for k in checkpoints) + " |",
+             "|---|---|" + "---|" * len(checkpoints)]
+    for group in dict.fromkeys(r["group"] for r in entry["runs"]):
+        rows = [r for r in entry["runs"] if r["group"] == group]
+        cells = []
+        for k in checkpoints:
+            spread = [r["by_checkpoint"][k]["spread"] for r in rows]
+            near = [r["by_checkpoint"][k]["near_prior"] for r in rows]
+            cells.append(f"{np.mean(spread):.3f} ({min(spread):.3f}–{max(spread):.3f}); "
+                         f"{np.mean(near):.1f} ({min(near)}–{max(near)}) dims")
+        lines.append(f"| {group} | {len(rows)} | " + " | ".join(cells) + " |")
+    return "\n".join(lines) + "\n"
 
 
 def walls_block(presets: dict) -> str:

@@ -396,6 +396,12 @@ def test_curiosity_noise(sweep, monkeypatch):
     assert sorted(spread) == sweep.checkpoint_steps()
     first = np.exp(np.asarray(wm.encode(cfg, params["vae"], rp["frames"][run, 0])[1], np.float64)).mean(-1)  # [agents]
     np.testing.assert_allclose(spread[200] * 200 * 2, cn.spread.sum() + first.sum(), rtol=1e-5)
+    # Dimension by dimension, the same variances: their mean is the spread.
+    dims = an.posterior_dims(sweep, run, every=1)
+    assert sorted(dims) == sorted(spread) and dims[200].shape == (cfg.latent,)
+    views = np.exp(np.asarray(wm.encode(cfg, params["vae"], rp["frames"][run, :200])[1], np.float64))
+    np.testing.assert_allclose(dims[200], views.reshape(-1, cfg.latent).mean(0), rtol=1e-5)
+    assert all(dims[k].mean() == pytest.approx(v, rel=1e-12) for k, v in spread.items())
     with pytest.raises(ValueError, match="every=0: want a whole number of views >= 1"):
         an.posterior_spread(sweep, run, every=0)
     # The same buffer written from slot 430 on, its head gone round past the end to 130: the same steps.

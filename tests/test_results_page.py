@@ -129,6 +129,35 @@ def test_reconstruction_evidence_refuses_a_sweep_without_checkpoints(tiny_sweep,
     assert not (tmp_path / "out").exists()  # nothing written
 
 
+def test_spread_evidence_on_the_tiny_sweep(results, tiny_sweep, tmp_path, capsys):
+    """Every run's posterior variance per dimension at every checkpoint, on the newest buffer's
+    views: its mean is `posterior_spread`'s, the dimensions near the prior are counted from it, and
+    the page's block shows one row per group. Bad input writes nothing."""
+    spec = importlib.util.spec_from_file_location("mjx_curio_spread_evidence", ROOT / "experiments" / "spread_evidence.py")
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    module.OUT = tmp_path / "out" / "posterior_dims.json"
+    assert module.main([str(tmp_path / "nowhere")]) == 2 and "does not exist" in capsys.readouterr().err
+    metrics_only = _copy_sweep(tiny_sweep, tmp_path / "metrics_only")
+    assert module.main([str(metrics_only)]) == 2 and "spread_evidence.py:" in capsys.readouterr().err
+    assert not (tmp_path / "out").exists()
+    entry = module.evidence(str(tiny_sweep))
+    sweep = an.load(tiny_sweep)
+    assert [r["run"] for r in entry["runs"]] == [r.name for r in sweep.runs]
+    for i in (0, sweep.n_runs - 1):
+        spread = an.posterior_spread(sweep, i, every=module.EVERY)
+        got = entry["runs"][i]["by_checkpoint"]
+        assert list(got) == [str(k) for k in sweep.checkpoint_steps()]
+        for k, v in spread.items():
+            assert got[str(k)]["spread"] == pytest.approx(v, rel=1e-9)
+            sigma2 = np.array(got[str(k)]["sigma2"])
+            assert len(sigma2) == entry["latent"] and got[str(k)]["near_prior"] == int((sigma2 > module.NEAR_PRIOR).sum())
+    assert json.loads(module.OUT.read_text()) == [entry]
+    block = results.curiosity_parts_block({}, dims=module.OUT)
+    rows = [r for r in block.splitlines() if r.startswith("| ") and not r.startswith("| group")]
+    assert len(rows) == len(sweep.groups()) and block.startswith("No sweep that records")
+
+
 def test_reconstruction_evidence_policies_and_paired_test_on_planted_numbers(tiny_sweep):
     """Planted errors: run i's VAE on run j's views costs 100 * (i's group) + (j's group); the
     per-policy table must average exactly the pairs of other runs, and the paired test must be

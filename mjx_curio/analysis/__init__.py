@@ -71,7 +71,8 @@ curiosity_parts, self_model and temperatures):
     curiosity_noise  how much of each step's curiosity is the sampling noise of the latent, which
               no self-model can foresee, and so the ceiling of a per-step test of it:
               `curiosity_noise` (JAX) and the `CuriosityNoise` it returns; `posterior_spread`,
-              the part of the curiosity the noise alone adds, at every kept checkpoint
+              the part of the curiosity the noise alone adds, at every kept checkpoint, and
+              `posterior_dims`, that variance dimension by dimension
     tables    the headline table: `headline_table` and its `Table` (Markdown, CSV)
     significance  the tests, in NumPy alone: `welch_t`, `one_way_anova`, `block_anova`,
               `pearson_r`, `fisher_z`, and the t and F tails behind them (`t_pvalue`, `f_pvalue`,
@@ -101,7 +102,7 @@ as before.
 from __future__ import annotations
 
 from mjx_curio.analysis.action_values import ActionValues, action_values
-from mjx_curio.analysis.curiosity_noise import CuriosityNoise, curiosity_noise, posterior_spread
+from mjx_curio.analysis.curiosity_noise import CuriosityNoise, curiosity_noise, posterior_dims, posterior_spread
 from mjx_curio.analysis.claims import (
     CLAIMS,
     ClaimResult,
@@ -250,7 +251,7 @@ __all__ = [
     "ReconstructionQuality", "Reconstructions", "heldout_slots", "reconstruction_quality", "reconstructions",
     "edge_error", "ActionValues", "action_values",
     # curiosity_noise
-    "CuriosityNoise", "curiosity_noise", "posterior_spread",
+    "CuriosityNoise", "curiosity_noise", "posterior_dims", "posterior_spread",
     # curiosity_parts
     "PARTS", "curiosity_parts", "curiosity_parts_table", "parts_fall_rise", "records_spread",
     # tables

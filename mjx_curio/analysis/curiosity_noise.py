@@ -155,14 +155,13 @@ def curiosity_noise(sweep: Sweep, run: int | str = 0, step: int | None = None, c
 
 
 @functools.lru_cache(maxsize=None)
-def _spread(cfg):
+def _variances(cfg):
     import jax
     import jax.numpy as jnp
 
     from mjx_curio import world_model as wm
 
-    d = cfg.latent if cfg.curiosity == "mean" else 1
-    return jax.jit(lambda vae, frames: jnp.sum(jnp.exp(wm.encode(cfg, vae, frames)[1]), -1) / d)
+    return jax.jit(lambda vae, frames: jnp.exp(wm.encode(cfg, vae, frames)[1]))
 
 
 def posterior_spread(sweep: Sweep, run: int | str = 0, steps=None, every: int = 10, step: int | None = None) -> dict:
@@ -170,12 +169,22 @@ def posterior_spread(sweep: Sweep, run: int | str = 0, steps=None, every: int = 
     `run`'s VAE at each of `steps` (default: every kept checkpoint), on every `every`-th view of the
     replay buffer kept at `step` (default: the newest): one set of views, so that only the encoder
     differs. The part of the mean curiosity that the sampling noise alone adds, over training."""
+    reduce = np.mean if sweep.learner_config().curiosity == "mean" else np.sum
+    return {k: float(reduce(v)) for k, v in posterior_dims(sweep, run, steps, every, step).items()}
+
+
+def posterior_dims(sweep: Sweep, run: int | str = 0, steps=None, every: int = 10, step: int | None = None) -> dict:
+    """{checkpoint step: float [latent]}: each latent dimension's posterior variance sigma_d^2,
+    mean over the views and agents of `posterior_spread` (the same arguments). A dimension near 1
+    is one the VAE has all but stopped using: its posterior is nearly the prior, whatever the view."""
     if not (isinstance(every, (int, np.integer)) and every >= 1):
         raise ValueError(f"every={every!r}: want a whole number of views >= 1")
     r = sweep.run(run)
     step = replay_step(sweep, step)
     rp = sweep.restore_replay(step, keys=("frames", "size"))
     frames = rp["frames"][r.index, :int(rp["size"][r.index]):every]
-    f = _spread(sweep.learner_config())
+    cfg = sweep.learner_config()
+    f = _variances(cfg)
     steps = sweep.checkpoint_steps() if steps is None else [sweep.check_step(s) for s in steps]
-    return {int(s): float(np.asarray(f(sweep.params(s, r.index)["vae"], frames), np.float64).mean()) for s in steps}
+    return {int(s): np.asarray(f(sweep.params(s, r.index)["vae"], frames), np.float64).reshape(-1, cfg.latent).mean(0)
+            for s in steps}

@@ -1,0 +1,77 @@
+"""Where the posterior's spread comes from, checkpoint by checkpoint (claim 1's parts)
+
+    python experiments/spread_evidence.py runs/paper/single_agent.spread
+
+Every run's VAE at every kept checkpoint encodes the same views, every 10th of the replay buffer
+kept at the newest checkpoint (`analysis.posterior_dims`), and gives each latent dimension's
+posterior variance sigma_d^2, mean over those views. Per run and checkpoint: the spread (the mean
+over the dimensions, the part of the curiosity no prediction removes) and how many of the
+dimensions have a variance above NEAR_PRIOR, closer to the prior's 1 than to a precise code: ones
+the VAE has all but stopped using, each of which adds its sigma_d^2 / latent to every step's
+curiosity whatever the world model learns.
+
+Writes docs/results/posterior_dims.json (one entry per sweep, replacing an earlier entry of the
+same sweep) and prints the entry as `results.py page` puts it in docs/results.md, under claim 1's
+parts (a Markdown table, one row per group).
+"""
+
+from __future__ import annotations
+
+import json
+import pathlib
+import sys
+
+import mjx_curio  # noqa: F401  (XLA flags before JAX initialises)
+
+import numpy as np
+
+OUT = pathlib.Path(__file__).resolve().parents[1] / "docs" / "results" / "posterior_dims.json"
+NEAR_PRIOR = 0.5  # sigma_d^2 above this: the dimension's code is mostly noise
+EVERY = 10  # every 10th view of the buffer
+
+
+def evidence(path: str) -> dict:
+    from mjx_curio import analysis as an
+    from mjx_curio.analysis.action_values import replay_step
+
+    sweep = an.load(path)
+    step = replay_step(sweep)  # SweepError, before anything is computed, where none kept the buffers
+    reduce = np.mean if sweep.learner_config().curiosity == "mean" else np.sum  # as curiosity reduces
+    runs = []
+    for i, r in enumerate(sweep.runs):
+        dims = an.posterior_dims(sweep, i, every=EVERY, step=step)
+        runs.append({"run": r.name, "group": r.group_label, "seed": r.seed,
+                     "by_checkpoint": {str(k): {"spread": float(reduce(v)), "near_prior": int((v > NEAR_PRIOR).sum()),
+                                                "sigma2": [round(float(x), 4) for x in v]} for k, v in dims.items()}})
+    entry = {"sweep": sweep.name, "replay_step": step,
+             "every": EVERY, "near_prior": NEAR_PRIOR, "latent": sweep.learner_config().latent, "runs": runs}
+    saved = json.loads(OUT.read_text()) if OUT.exists() else []
+    saved = [e for e in saved if e["sweep"] != entry["sweep"]] + [entry]
+    OUT.parent.mkdir(parents=True, exist_ok=True)
+    OUT.write_text(json.dumps(sorted(saved, key=lambda e: e["sweep"]), indent=1) + "\n")
+    sys.path.insert(0, str(pathlib.Path(__file__).resolve().parent))
+    import results  # the page's own table of an entry
+
+    print(results.posterior_dims_table(entry))
+    print(f"wrote {OUT}")
+    return entry
+
+
+def main(argv: list[str]) -> int:
+    """Bad input (no such sweep, no checkpoints or replay buffers) is a one-line message and exit
+    status 2, before anything is written."""
+    from mjx_curio.analysis import SweepError
+
+    if len(argv) != 1:
+        print(__doc__.split("\n\n")[1], file=sys.stderr)
+        return 2
+    try:
+        evidence(argv[0])
+    except SweepError as err:
+        print(f"spread_evidence.py: {err}", file=sys.stderr)
+        return 2
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main(sys.argv[1:]))
