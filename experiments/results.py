@@ -209,23 +209,23 @@ def curiosity_parts_block(presets: dict, dims: pathlib.Path = POSTERIOR_DIMS) ->
 
 
 def posterior_dims_table(entry: dict) -> str:
-    """Markdown: per group and checkpoint, the mean over its runs (range over runs) of the spread
-    and of the dimensions near the prior."""
+    """Markdown: per group and checkpoint, the mean over its runs (range over runs) of the spread,
+    the median dimension's variance and the dimensions near the prior."""
     checkpoints = list(entry["runs"][0]["by_checkpoint"])
     lines = [f"`{entry['sweep']}`: each checkpoint's VAE on every {entry['every']}th view of the replay buffer kept "
              f"at step {entry['replay_step']:,}; per checkpoint, the posterior spread (mean over views and the "
-             f"{entry['latent']} dimensions of sigma²) and the dimensions whose mean sigma² exceeds "
-             f"{entry['near_prior']:g} (mostly noise, nearer the prior's 1 than a precise code); mean over runs "
-             "(range over runs).", "",
+             f"{entry['latent']} dimensions of σ²), the median dimension's σ² (mean over views), and the dimensions "
+             f"whose σ² exceeds {entry['near_prior']:g} (mostly noise, nearer the prior's 1 than a precise code); "
+             "mean over runs (range over runs).", "",
              "| group | runs | " + " | ".join(f"step {int(k):,}" for k in checkpoints) + " |",
              "|---|---|" + "---|" * len(checkpoints)]
     for group in dict.fromkeys(r["group"] for r in entry["runs"]):
         rows = [r for r in entry["runs"] if r["group"] == group]
         cells = []
         for k in checkpoints:
-            spread = [r["by_checkpoint"][k]["spread"] for r in rows]
-            near = [r["by_checkpoint"][k]["near_prior"] for r in rows]
-            cells.append(f"{np.mean(spread):.3f} ({min(spread):.3f}–{max(spread):.3f}); "
+            spread, median, near = ([r["by_checkpoint"][k][x] for r in rows] for x in ("spread", "median", "near_prior"))
+            cells.append(f"spread {np.mean(spread):.3f} ({min(spread):.3f}–{max(spread):.3f}); median "
+                         f"{np.mean(median):.3f} ({min(median):.3f}–{max(median):.3f}); "
                          f"{np.mean(near):.1f} ({min(near)}–{max(near)}) dims")
         lines.append(f"| {group} | {len(rows)} | " + " | ".join(cells) + " |")
     return "\n".join(lines) + "\n"

@@ -5,10 +5,12 @@
 Every run's VAE at every kept checkpoint encodes the same views, every 10th of the replay buffer
 kept at the newest checkpoint (`analysis.posterior_dims`), and gives each latent dimension's
 posterior variance sigma_d^2, mean over those views. Per run and checkpoint: the spread (the mean
-over the dimensions, the part of the curiosity no prediction removes) and how many of the
-dimensions have a variance above NEAR_PRIOR, closer to the prior's 1 than to a precise code: ones
-the VAE has all but stopped using, each of which adds its sigma_d^2 / latent to every step's
-curiosity whatever the world model learns.
+over the dimensions, the part of the curiosity no prediction removes), the median dimension's
+variance, and how many of the dimensions have a variance above NEAR_PRIOR, closer to the prior's 1
+than to a precise code: ones the VAE has all but stopped using, each of which adds its
+sigma_d^2 / latent to every step's curiosity whatever the world model learns. A spread that rises
+while the median falls is a code growing more unequal: some dimensions sharper, others left to
+noise.
 
 Writes docs/results/posterior_dims.json (one entry per sweep, replacing an earlier entry of the
 same sweep) and prints the entry as `results.py page` puts it in docs/results.md, under claim 1's
@@ -41,7 +43,8 @@ def evidence(path: str) -> dict:
     for i, r in enumerate(sweep.runs):
         dims = an.posterior_dims(sweep, i, every=EVERY, step=step)
         runs.append({"run": r.name, "group": r.group_label, "seed": r.seed,
-                     "by_checkpoint": {str(k): {"spread": float(reduce(v)), "near_prior": int((v > NEAR_PRIOR).sum()),
+                     "by_checkpoint": {str(k): {"spread": float(reduce(v)), "median": float(np.median(v)),
+                                                "near_prior": int((v > NEAR_PRIOR).sum()),
                                                 "sigma2": [round(float(x), 4) for x in v]} for k, v in dims.items()}})
     entry = {"sweep": sweep.name, "replay_step": step,
              "every": EVERY, "near_prior": NEAR_PRIOR, "latent": sweep.learner_config().latent, "runs": runs}

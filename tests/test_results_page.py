@@ -152,6 +152,7 @@ def test_spread_evidence_on_the_tiny_sweep(results, tiny_sweep, tmp_path, capsys
             assert got[str(k)]["spread"] == pytest.approx(v, rel=1e-9)
             sigma2 = np.array(got[str(k)]["sigma2"])
             assert len(sigma2) == entry["latent"] and got[str(k)]["near_prior"] == int((sigma2 > module.NEAR_PRIOR).sum())
+            assert got[str(k)]["median"] == pytest.approx(np.median(sigma2), abs=1e-4)  # sigma2 is kept to 4 decimals
     assert json.loads(module.OUT.read_text()) == [entry]
     block = results.curiosity_parts_block({}, dims=module.OUT)
     rows = [r for r in block.splitlines() if r.startswith("| ") and not r.startswith("| group")]
