@@ -66,7 +66,9 @@
 # docs/results/self_model_noise.json, quoted under claim 8).
 # Claim 1's fall and rise are taken apart into the world model's error and the posterior's spread
 # on a third side experiment, one agent under epsilon-greedy (fig. 8's setting), which records the
-# spread (every sweep made now does; the committed presets ran before), not run by this script:
+# spread (every sweep made now does; the committed presets ran before), 4 seeds x 40,000 steps
+# (1 h 44 min on the AMD EPYC above, 13 min of it paused; 32-36 run-steps/s alone), not run by
+# this script:
 #     python -m mjx_curio.sweep preset=single_agent policies=eps seeds=4 steps=40000 checkpoint_every=1000 out=runs/paper/single_agent.spread
 #     python experiments/spread_evidence.py runs/paper/single_agent.spread   # and on multi_agent.per_step
 # (the second: each latent dimension's posterior variance at every kept checkpoint,

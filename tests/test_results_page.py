@@ -416,7 +416,8 @@ def test_page_blocks_on_the_tiny_sweeps(results, tiny_sweeps_dir, tmp_path):
     assert len(list((tmp_path / "all").glob("*.png"))) == len(results._figures()) == 19
     # The tiny sweeps record the spread: claim 1's three parts per group of each preset they stand
     # for; 200 steps fill the early block (steps 0-2k) alone.
-    parts = [r.split(" | ") for r in results.curiosity_parts_block(presets).splitlines()[2:] if r.startswith("| ")]
+    block = results.curiosity_parts_block(presets, dims=tmp_path / "no_posterior_dims.json")
+    parts = [r.split(" | ") for r in block.splitlines()[2:] if r.startswith("| ")]
     assert len(parts) == 3 * sum(len(s.groups()) for s in presets.values())
     assert [r[3] for r in parts[:3]] == list(an.PARTS.values())
     assert all(float(r[4]) > 0 and r[5:9] == ["n/a"] * 4 for r in parts if r[3] != "error against the posterior mean")
