@@ -63,17 +63,10 @@ def evidence(path: str) -> dict:
 def main(argv: list[str]) -> int:
     """Bad input (no such sweep, no checkpoints or replay buffers) is a one-line message and exit
     status 2, before anything is written."""
-    from mjx_curio.analysis import SweepError
+    sys.path.insert(0, str(pathlib.Path(__file__).resolve().parent))
+    from evidence_cli import one_sweep_main
 
-    if len(argv) != 1:
-        print(__doc__.split("\n\n")[1], file=sys.stderr)
-        return 2
-    try:
-        evidence(argv[0])
-    except SweepError as err:
-        print(f"spread_evidence.py: {err}", file=sys.stderr)
-        return 2
-    return 0
+    return one_sweep_main("spread_evidence.py", __doc__, evidence, argv)
 
 
 if __name__ == "__main__":
