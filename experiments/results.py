@@ -621,6 +621,16 @@ def _figures() -> tuple[Figure, ...]:
                "average over 1,000 steps; x: agent steps. Means over {seeds} seeds with 95 % confidence bands. Paper: "
                "fig. 8 (the curiosity alone, one run).",
                _one(lambda p, ax: an.plot_curiosity_parts(p["single_agent.spread"], ax, "eps"), size=(10, 3.8))),
+        Figure("single_agent_error_without_spread", ("single_agent.spread", "single_agent.z_mean"),
+               "Claim 1's curve without the posterior's spread, one agent, ε-greedy: the MDN-RNN's error against the "
+               "posterior mean learnt two ways. Red: with the paper's sampled latents (`single_agent.spread`, the "
+               "curiosity minus the recorded spread: the red curve of the figure above); blue: with the posterior "
+               "mean as the latent for acting, the memory and the curiosity (`single_agent.z_mean`, the paper's "
+               "settings but `z=mean`: its curiosity, all of it error). y: squared latent distance, unitless, moving "
+               "average over 1,000 steps; x: agent steps. Means over {seeds} seeds with 95 % confidence bands. Not in "
+               "the paper.",
+               _one(lambda p, ax: an.plot_error_without_spread(p["single_agent.spread"], p["single_agent.z_mean"],
+                                                               ax, "eps"), size=(10, 3.8))),
         *_temperature_figures("boltzmann_temperatures", "Boltzmann temperatures T = 0.5 to 2.5", "0.5", "2.5",
                               curves="Paper: fig. 19.", actions="Paper: fig. 19 shows only curiosity."),
         *_temperature_figures("boltzmann_low_temperatures",

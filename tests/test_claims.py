@@ -19,9 +19,11 @@ from mjx_curio.metrics import SCHEMA, VIEW_TARGETS
 # ------------------------------------------------------------------------------ synthetic sweeps
 
 
-def fake_sweep(name, n_agents, groups, n_windows, seeds=3, walls="same", preset="none", every=20, first_seed=0):
+def fake_sweep(name, n_agents, groups, n_windows, seeds=3, walls="same", preset="none", every=20, first_seed=0,
+               z="sample"):
     """A `Sweep` built in memory: `groups` = [(policy, setting value)], `seeds` runs each (seeds
-    `first_seed` on), every metric of the schema zero (floats: zero too) until a test sets it."""
+    `first_seed` on), latents `z`, every metric of the schema zero (floats: zero too) until a test
+    sets it."""
     runs = []
     for policy, value in groups:
         for seed in range(first_seed, first_seed + seeds):
@@ -34,7 +36,7 @@ def fake_sweep(name, n_agents, groups, n_windows, seeds=3, walls="same", preset=
                 "actions": list(ACTIONS), "objects": list(OBJECTS), "view_targets": list(VIEW_TARGETS),
                 "metrics": {"every": every, "windows": n_windows},
                 "config": {"walls": walls, "preset": preset, "seeds": seeds, "first_seed": first_seed},
-                "run_config": {"image": 16}}
+                "run_config": {"image": 16, "learner": {"z": z}}}
     metrics = {k: np.zeros((len(runs), n_windows) + m.shape(n_agents), m.dtype) for k, m in SCHEMA.items()}
     metrics["steps_taken"][:] = every
     metrics["action_counts"][..., 0] = every
@@ -346,8 +348,8 @@ def test_curiosity_parts_put_a_planted_rise_in_the_spread_not_the_error():
     """Curiosity = error + spread with the error falling and flat after the trough and the
     spread rising late: the parts' table gives the rise to the spread (share ~100 %, its CI above
     0) and none to the error (its CI around 0), the fall to the error, and the curiosity's own
-    fall and rise as `curiosity_fall_rise` has them. A sweep made before sweeps recorded the
-    spread has no rows and no parts."""
+    fall and rise as `curiosity_fall_rise` has them. A z=mean sweep's curiosity is one part, the
+    error. A sweep made before sweeps recorded the spread has no rows and no parts."""
     rng = np.random.default_rng(3)
     s = fake_sweep("single_agent.spread", 1, [("eps", 0.2)], 2000, seeds=6)  # 40,000 steps
     steps = s.steps - 10
@@ -368,6 +370,15 @@ def test_curiosity_parts_put_a_planted_rise_in_the_spread_not_the_error():
     assert rows["error"]["rise_low"] < 0 < rows["error"]["rise_high"]
     assert rows["error"]["fall"] == pytest.approx(0.4, abs=0.01) and rows["spread"]["fall_share"] == pytest.approx(0, abs=0.05)
     assert rows["spread"]["early"] == pytest.approx(0.3, abs=0.01) and rows["spread"]["late"] == pytest.approx(0.4, abs=0.01)
+    # Under z=mean the latent is the posterior mean: the spread recorded is 0 and the curiosity is
+    # all error, one row a group, named so.
+    m = fake_sweep("single_agent.z_mean", 1, [("eps", 0.2)], 2000, seeds=6, z="mean")
+    m.metrics["curiosity"][:] = error[None, :, None] + noise()
+    both = an.curiosity_parts_table({"single_agent.spread": s, "single_agent.z_mean": m})
+    assert an.samples_latent(s) and not an.samples_latent(m)
+    assert [(r[0], r[3]) for r in both.rows[3:]] == [("`single_agent.z_mean`", an.MEAN_LATENT_PART["curiosity"])]
+    assert both.values[3]["fall"] == pytest.approx(0.4, abs=0.01) and both.values[3]["fall_share"] == 1.0
+    assert "z=mean" in both.note and "z=mean" not in table.note
     del s.metrics["curiosity_spread"]
     assert not an.records_spread(s) and an.curiosity_parts_table({"single_agent": s}).rows == []
     with pytest.raises(ValueError, match="curiosity_spread"):

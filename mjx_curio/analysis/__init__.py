@@ -32,6 +32,7 @@ Figure) it is given and returning it:
     plot_turn_reversals            trembling (section 5): turning back over time, against chance
     plot_self_model_tracking       claim 8: the self-model's predictions against the curiosity obtained, per step
     plot_curiosity_parts           claim 1's curve taken apart: the error against the posterior mean and its spread
+    plot_error_without_spread      that error from a z=sample sweep beside a z=mean sweep's curiosity
     headline_table                 mean +- sd across seeds per group of the key numbers
     temperature_table              per Boltzmann temperature: curiosity, action entropy, contacts;
                                    each tested across T, blocked by seed
@@ -89,7 +90,8 @@ curiosity_parts, self_model and temperatures):
               `power_table`, and `seeds_needed`, `detectable`, `t_power`, `noncentral_t_sf` behind it
     curiosity_parts  claim 1's fall and rise split into the world model's error against the posterior
               mean and the posterior's spread, from sweeps that record the spread:
-              `curiosity_parts_table`, `parts_fall_rise`, `curiosity_parts`, `records_spread`
+              `curiosity_parts_table`, `parts_fall_rise`, `curiosity_parts`, `records_spread`,
+              `samples_latent` (z=sample; under z=mean the curiosity is all error)
     walls     what a different texture on every wall changes: `walls_table` (each walls-different
               preset against its identical-walls preset, per policy) and `walls_measures`
     figures   every `plot_*` function, the colours and labels they share, and saving
@@ -137,11 +139,13 @@ from mjx_curio.analysis.claims import (
     watching_excess,
 )
 from mjx_curio.analysis.curiosity_parts import (
+    MEAN_LATENT_PART,
     PARTS,
     curiosity_parts,
     curiosity_parts_table,
     parts_fall_rise,
     records_spread,
+    samples_latent,
 )
 from mjx_curio.analysis.self_model import STEP_METRICS, records_steps, step_tracking, tracking_over_time
 from mjx_curio.analysis.significance import (
@@ -169,6 +173,7 @@ from mjx_curio.analysis.figures import (
     plot_curiosity,
     plot_curiosity_groups,
     plot_curiosity_parts,
+    plot_error_without_spread,
     plot_interaction_frequency,
     plot_losses,
     plot_observational,
@@ -253,7 +258,8 @@ __all__ = [
     # curiosity_noise
     "CuriosityNoise", "curiosity_noise", "posterior_dims", "posterior_spread",
     # curiosity_parts
-    "PARTS", "curiosity_parts", "curiosity_parts_table", "parts_fall_rise", "records_spread",
+    "MEAN_LATENT_PART", "PARTS", "curiosity_parts", "curiosity_parts_table", "parts_fall_rise", "records_spread",
+    "samples_latent",
     # tables
     "Table", "headline_table",
     # temperatures
@@ -278,7 +284,8 @@ __all__ = [
     # figures
     "AGENT_COLORS", "CURIOSITY_LABEL", "FIGURES_DIRNAME", "POLICY_COLORS", "STEPS_LABEL", "TARGET_COLORS",
     "empty_axes", "figures_dir", "plot_action_histogram", "plot_boltzmann_greediness", "plot_cumulative_interactions",
-    "plot_curiosity", "plot_curiosity_groups", "plot_curiosity_parts", "plot_interaction_frequency", "plot_losses", "plot_observational",
+    "plot_curiosity", "plot_curiosity_groups", "plot_curiosity_parts", "plot_error_without_spread",
+    "plot_interaction_frequency", "plot_losses", "plot_observational",
     "plot_reconstructions", "plot_self_model_tracking", "plot_single_vs_multi", "plot_temperature_measures",
     "plot_temperatures", "plot_turn_reversals", "plot_vae_single_vs_multi", "plot_view_fractions", "save_figure",
     "save_text", "slug",

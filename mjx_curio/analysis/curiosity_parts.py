@@ -26,11 +26,19 @@ SPREAD = "curiosity_spread"
 # The parts, in the order tables and figures show them: the whole, the part learning cannot
 # remove, and the part it can.
 PARTS = {"curiosity": "curiosity obtained", "spread": "posterior spread", "error": "error against the posterior mean"}
+# Under z=mean the latent is the posterior mean: no spread, the curiosity is the error itself.
+MEAN_LATENT_PART = {"curiosity": "curiosity obtained = error (z=mean, no spread)"}
 
 
 def records_spread(sweep: Sweep) -> bool:
     """Whether `sweep` recorded each window's posterior spread (sweeps made before it did not)."""
     return SPREAD in sweep.metrics
+
+
+def samples_latent(sweep: Sweep) -> bool:
+    """Whether `sweep`'s latents were posterior samples (z=sample, the paper's), so that its
+    curiosity holds the spread; under z=mean (the posterior mean as the latent) it is all error."""
+    return sweep.learner_config().z == "sample"
 
 
 def curiosity_parts(sweep: Sweep, group: Group) -> dict[str, np.ndarray]:
@@ -54,7 +62,8 @@ def parts_fall_rise(sweep: Sweep, group: Group) -> dict[str, dict]:
 def curiosity_parts_table(presets: Mapping[str, Sweep]) -> Table:
     """Per sweep that records the spread and per group of it: each part's means over claim 1's
     blocks (steps 0-2,000, 10,000-30,000, the last 10,000), its fall and rise with their 95 % CIs
-    over runs, and its share of the curiosity's mean fall and rise."""
+    over runs, and its share of the curiosity's mean fall and rise. A z=mean sweep has one row a
+    group: its curiosity, all of it error (`MEAN_LATENT_PART`)."""
     cols = ["sweep", "group", "runs", "part", "steps 0-2k", "steps 10k-30k", "last 10k steps", "fall [95 % CI]",
             "rise [95 % CI]", "share of the fall", "share of the rise"]
     rows, values = [], []
@@ -64,7 +73,7 @@ def curiosity_parts_table(presets: Mapping[str, Sweep]) -> Table:
         for g in s.groups():
             d = parts_fall_rise(s, g)
             whole = {k: _mean(d["curiosity"][k]) for k in ("fall", "rise")}
-            for part, what in PARTS.items():
+            for part, what in (PARTS if samples_latent(s) else MEAN_LATENT_PART).items():
                 x = d[part]
                 block = {k: _mean(x[k]) for k in ("early", "trough", "late")}
                 fall, rise = mean_ci(x["fall"]), mean_ci(x["rise"])
@@ -80,6 +89,8 @@ def curiosity_parts_table(presets: Mapping[str, Sweep]) -> Table:
             "over the latent's sampling noise; the spread is recorded, the error is curiosity minus spread. "
             "fall = steps 0-2k minus 10k-30k, rise = last 10k minus 10k-30k (claim 1's blocks), per run; "
             "mean over runs [95 % CI]. Share: the part's mean over the curiosity's.")
+    if any(not samples_latent(s) for s in presets.values() if records_spread(s)):
+        note += " Under z=mean (the posterior mean as the latent) there is no spread: the curiosity is all error."
     return Table(cols, rows, values, note if rows else "")
 
 

@@ -392,6 +392,24 @@ def plot_curiosity_parts(sweep: Sweep, ax, group: Any = None, window: int = 50):
     return _finish(ax, f"Curiosity = error + posterior spread, {who}: {g.label}", STEPS_LABEL, CURIOSITY_LABEL)
 
 
+def plot_error_without_spread(sampled: Sweep, mean_latent: Sweep, ax, group: Any = None, window: int = 50):
+    """The world model's error against the posterior mean from two sweeps of one setting: one
+    that samples its latents and records the spread (its curiosity minus the spread, red) and one
+    whose latent is the posterior mean (z=mean: its curiosity, all error, blue), each a trailing
+    moving average over `window` points, mean over seeds with 95% bands, the agents' mean. What
+    claim 1's curve would be without the posterior's spread, learnt either way."""
+    for s, part, color, what in ((sampled, "error", "tab:red", "z=sample: curiosity minus spread"),
+                                 (mean_latent, "curiosity", "tab:blue", "z=mean: curiosity")):
+        g = s.group(group)
+        mean, lo, hi, _ = mean_ci(moving_average(curiosity_parts(s, g)[part], window, axis=1))
+        ax.plot(s.steps, mean, color=color, linewidth=2, label=f"{what}, {g.seeds_text}")
+        _band(ax, s.steps, lo, hi, color)
+    g = sampled.group(group)
+    who = "mean of both agents" if sampled.n_agents > 1 else "single agent"
+    return _finish(ax, f"The world model's error against the posterior mean, {who}: {g.label}", STEPS_LABEL,
+                   CURIOSITY_LABEL)
+
+
 def plot_reconstructions(sweep: Sweep, fig, run: int | str = 0, steps: Sequence[int] | None = None, n_frames: int = 8,
                          rec: Reconstructions | None = None):
     """Real views (top row) and run `run`'s VAE reconstructions of them after an early and a
