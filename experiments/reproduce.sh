@@ -73,6 +73,11 @@
 #     python experiments/spread_evidence.py runs/paper/single_agent.spread   # and on multi_agent.per_step
 # (the second: each latent dimension's posterior variance at every kept checkpoint,
 # docs/results/posterior_dims.json, shown under claim 1's parts).
+# The same side experiment with the posterior mean as the latent (z=mean, not the paper's
+# setting: the curiosity is then the world model's error alone), 4 seeds x 40,000 steps (49 min
+# on the Intel Xeon above, 46-59 run-steps/s), not run by this script either:
+#     python -m mjx_curio.sweep preset=single_agent policies=eps seeds=4 steps=40000 z=mean checkpoint_every=1000 out=runs/paper/single_agent.z_mean
+#     python experiments/spread_evidence.py runs/paper/single_agent.z_mean
 #
 # The paper's full scale (8 seeds, 80,000 steps, every preset) is a GPU job: install the CUDA
 # extra (pip install -e '.[cuda]') and run
