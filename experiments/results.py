@@ -621,6 +621,14 @@ def _figures() -> tuple[Figure, ...]:
                "average over 1,000 steps; x: agent steps. Means over {seeds} seeds with 95 % confidence bands. Paper: "
                "fig. 8 (the curiosity alone, one run).",
                _one(lambda p, ax: an.plot_curiosity_parts(p["single_agent.spread"], ax, "eps"), size=(10, 3.8))),
+        Figure("multi_agent_curiosity_parts", ("multi_agent.spread",),
+               "Claim 1's curve taken apart, two agents, ε-greedy (fig. 17's setting), from the side experiment "
+               "that records the posterior spread (`multi_agent.spread`: the paper's settings, its own seeds and "
+               "length). Black: the curiosity obtained; dashed purple: the spread of the VAE's posterior over the next "
+               "view's latent; red: the MDN-RNN's error against the posterior mean (curiosity minus spread). Mean of "
+               "both agents. y: squared latent distance, unitless, moving average over 1,000 steps; x: agent steps. "
+               "Means over {seeds} seeds with 95 % confidence bands. Paper: fig. 17 (the curiosity alone, one run).",
+               _one(lambda p, ax: an.plot_curiosity_parts(p["multi_agent.spread"], ax, "eps"), size=(10, 3.8))),
         Figure("single_agent_error_without_spread", ("single_agent.spread", "single_agent.z_mean"),
                "Claim 1's curve without the posterior's spread, one agent, ε-greedy: the MDN-RNN's error against the "
                "posterior mean learnt two ways. Red: with the paper's sampled latents (`single_agent.spread`, the "
