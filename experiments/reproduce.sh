@@ -73,6 +73,10 @@
 #     python experiments/spread_evidence.py runs/paper/single_agent.spread   # and on multi_agent.per_step
 # (the second: each latent dimension's posterior variance at every kept checkpoint,
 # docs/results/posterior_dims.json, shown under claim 1's parts).
+# The same for two agents under epsilon-greedy (fig. 17's setting), 4 seeds x 40,000 steps (about 30
+# run-steps/s alone on the Intel Xeon above, about 1 h 25 min):
+#     python -m mjx_curio.sweep preset=multi_agent policies=eps seeds=4 steps=40000 checkpoint_every=1000 out=runs/paper/multi_agent.spread
+#     python experiments/spread_evidence.py runs/paper/multi_agent.spread
 # The same side experiment with the posterior mean as the latent (z=mean, not the paper's
 # setting: the curiosity is then the world model's error alone), 4 seeds x 40,000 steps (49 min
 # on the Intel Xeon above, 46-59 run-steps/s), not run by this script either:
