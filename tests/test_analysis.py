@@ -477,6 +477,22 @@ def test_curiosity_figure_values(sweep):
     plt.close(fig)
 
 
+def test_error_without_spread_figure_values(sweep):
+    """Red: the sampled sweep's curiosity minus its spread; blue: the z=mean sweep's curiosity;
+    each the agents' mean, moving-averaged, mean over runs (one sweep standing for both here)."""
+    fig, ax = plt.subplots()
+    an.plot_error_without_spread(sweep, sweep, ax, "ucb", window=3)
+    g = sweep.group("ucb")
+    c = sweep.metrics["curiosity"][g.indices].astype(float).mean(axis=2)
+    s = sweep.metrics["curiosity_spread"][g.indices].astype(float).mean(axis=2)
+    want = {"tab:red": c - s, "tab:blue": c}
+    drawn = {ln.get_color(): ln.get_ydata() for ln in ax.lines}
+    for color, x in want.items():
+        np.testing.assert_allclose(drawn[color], an.moving_average(x, 3, axis=1).mean(axis=0), rtol=1e-6)
+    assert (s > 0).any()  # the two lines differ
+    plt.close(fig)
+
+
 def test_empty_figure_refused(tmp_path):
     fig, ax = plt.subplots()
     ax.plot([1, 2], [np.nan, np.nan])
