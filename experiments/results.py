@@ -522,18 +522,18 @@ def _single_vs_multi(presets):
     return fig
 
 
-def _curiosity_parts_figure(name: str, preset: str, group: str, setting: str, paper: str) -> Figure:
+def _curiosity_parts_figure(name: str, preset: str, group: str, agents: int, policy: str, paper: str) -> Figure:
     """Claim 1's curve taken apart (curiosity = spread + error) for one group of a spread side experiment."""
     from mjx_curio import analysis as an
 
-    agents = "" if setting.startswith("one agent") else " Mean of both agents."
+    who, mean = ("one agent", "") if agents == 1 else ("two agents", " Mean of both agents.")
     return Figure(
         name, (preset,),
-        f"Claim 1's curve taken apart, {setting}, from the side experiment that records the posterior spread "
+        f"Claim 1's curve taken apart, {who}, {policy}, from the side experiment that records the posterior spread "
         f"(`{preset}`: the paper's settings, its own seeds and length). Black: the curiosity obtained; dashed "
         "purple: the spread of the VAE's posterior over the next view's latent, the part of the curiosity's "
         "expectation no prediction removes; red: the rest, the MDN-RNN's error against the posterior mean "
-        f"(curiosity minus spread).{agents} y: squared latent distance, unitless, moving average over 1,000 "
+        f"(curiosity minus spread).{mean} y: squared latent distance, unitless, moving average over 1,000 "
         "steps; x: agent steps. Means over {seeds} seeds with 95 % confidence bands. "
         f"Paper: {paper} (the curiosity alone, one run).",
         _one(lambda p, ax: an.plot_curiosity_parts(p[preset], ax, group), size=(10, 3.8)))
@@ -629,12 +629,12 @@ def _figures() -> tuple[Figure, ...]:
                "each action's running mean curiosity over the previous 1,000 steps. x: agent steps. Means over "
                "{seeds} seeds with 95 % confidence bands. Paper: sections 3.2 and 5 (no figure).",
                _one(lambda p, ax: an.plot_self_model_tracking(p["multi_agent.per_step"], ax), size=(10, 3.8))),
-        _curiosity_parts_figure("single_agent_curiosity_parts", "single_agent.spread", "eps",
-                                "one agent, ε-greedy", "fig. 8"),
-        _curiosity_parts_figure("multi_agent_curiosity_parts", "multi_agent.spread", "eps",
-                                "two agents, ε-greedy (fig. 17's setting)", "fig. 17"),
-        _curiosity_parts_figure("multi_agent_ucb_curiosity_parts", "multi_agent.spread_ucb", "ucb",
-                                "two agents, UCB (fig. 18's setting)", "fig. 18"),
+        _curiosity_parts_figure("single_agent_curiosity_parts", "single_agent.spread", "eps", 1,
+                                "ε-greedy", "fig. 8"),
+        _curiosity_parts_figure("multi_agent_curiosity_parts", "multi_agent.spread", "eps", 2,
+                                "ε-greedy (fig. 17's setting)", "fig. 17"),
+        _curiosity_parts_figure("multi_agent_ucb_curiosity_parts", "multi_agent.spread_ucb", "ucb", 2,
+                                "UCB (fig. 18's setting)", "fig. 18"),
         Figure("single_agent_error_without_spread", ("single_agent.spread", "single_agent.z_mean"),
                "Claim 1's curve without the posterior's spread, one agent, ε-greedy: the MDN-RNN's error against the "
                "posterior mean learnt two ways. Red: with the paper's sampled latents (`single_agent.spread`, the "
