@@ -85,6 +85,10 @@
 # on the Intel Xeon above, 46-59 run-steps/s), not run by this script either:
 #     python -m mjx_curio.sweep preset=single_agent policies=eps seeds=4 steps=40000 z=mean checkpoint_every=1000 out=runs/paper/single_agent.z_mean
 #     python experiments/spread_evidence.py runs/paper/single_agent.z_mean
+# and for two agents under epsilon-greedy (1 h 39 min over 2 sessions on the Intel Xeon above,
+# 30 run-steps/s alone):
+#     python -m mjx_curio.sweep preset=multi_agent policies=eps seeds=4 steps=40000 z=mean checkpoint_every=1000 out=runs/paper/multi_agent.z_mean
+#     python experiments/spread_evidence.py runs/paper/multi_agent.z_mean
 #
 # The paper's full scale (8 seeds, 80,000 steps, every preset) is a GPU job: install the CUDA
 # extra (pip install -e '.[cuda]') and run

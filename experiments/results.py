@@ -645,6 +645,15 @@ def _figures() -> tuple[Figure, ...]:
                "the paper.",
                _one(lambda p, ax: an.plot_error_without_spread(p["single_agent.spread"], p["single_agent.z_mean"],
                                                                ax, "eps"), size=(10, 3.8))),
+        Figure("multi_agent_error_without_spread", ("multi_agent.spread", "multi_agent.z_mean"),
+               "The same for two agents, ε-greedy (fig. 17's setting), the mean of both agents: the MDN-RNN's error "
+               "against the posterior mean with the paper's sampled latents (red, `multi_agent.spread`: its "
+               "curiosity minus the recorded spread) and with the posterior mean as the latent (blue, "
+               "`multi_agent.z_mean`: the paper's settings but `z=mean`, its curiosity, all of it error). y: squared "
+               "latent distance, unitless, moving average over 1,000 steps; x: agent steps. Means over {seeds} seeds "
+               "with 95 % confidence bands. Not in the paper.",
+               _one(lambda p, ax: an.plot_error_without_spread(p["multi_agent.spread"], p["multi_agent.z_mean"],
+                                                               ax, "eps"), size=(10, 3.8))),
         *_temperature_figures("boltzmann_temperatures", "Boltzmann temperatures T = 0.5 to 2.5", "0.5", "2.5",
                               curves="Paper: fig. 19.", actions="Paper: fig. 19 shows only curiosity."),
         *_temperature_figures("boltzmann_low_temperatures",
