@@ -539,6 +539,25 @@ def _curiosity_parts_figure(name: str, preset: str, group: str, agents: int, pol
         _one(lambda p, ax: an.plot_curiosity_parts(p[preset], ax, group), size=(10, 3.8)))
 
 
+def _error_without_spread_figure(name: str, preset: str, agents: int, setting: str) -> Figure:
+    """Claim 1's curve without the posterior's spread, ε-greedy: the world model's error from the
+    spread side experiment of `preset` beside the curiosity of its z=mean one."""
+    from mjx_curio import analysis as an
+
+    sampled, mean_latent = f"{preset}.spread", f"{preset}.z_mean"
+    who = "one agent" if agents == 1 else "two agents, the mean of both"
+    return Figure(
+        name, (sampled, mean_latent),
+        f"Claim 1's curve without the posterior's spread, {who}, ε-greedy ({setting}): the MDN-RNN's error "
+        "against the posterior mean learnt two ways. Red: with the paper's sampled latents "
+        f"(`{sampled}`, the curiosity minus the recorded spread: the red curve of the curiosity-parts figure); "
+        f"blue: with the posterior mean as the latent for acting, the memory and the curiosity (`{mean_latent}`, "
+        "the paper's settings but `z=mean`: its curiosity, all of it error). y: squared latent distance, unitless, "
+        "moving average over 1,000 steps; x: agent steps. Means over {seeds} seeds with 95 % confidence bands. "
+        "Not in the paper.",
+        _one(lambda p, ax: an.plot_error_without_spread(p[sampled], p[mean_latent], ax, "eps"), size=(10, 3.8)))
+
+
 def _figures() -> tuple[Figure, ...]:
     from mjx_curio import analysis as an
 
@@ -635,25 +654,8 @@ def _figures() -> tuple[Figure, ...]:
                                 "ε-greedy (fig. 17's setting)", "fig. 17"),
         _curiosity_parts_figure("multi_agent_ucb_curiosity_parts", "multi_agent.spread_ucb", "ucb", 2,
                                 "UCB (fig. 18's setting)", "fig. 18"),
-        Figure("single_agent_error_without_spread", ("single_agent.spread", "single_agent.z_mean"),
-               "Claim 1's curve without the posterior's spread, one agent, ε-greedy: the MDN-RNN's error against the "
-               "posterior mean learnt two ways. Red: with the paper's sampled latents (`single_agent.spread`, the "
-               "curiosity minus the recorded spread: the red curve of the figure above); blue: with the posterior "
-               "mean as the latent for acting, the memory and the curiosity (`single_agent.z_mean`, the paper's "
-               "settings but `z=mean`: its curiosity, all of it error). y: squared latent distance, unitless, moving "
-               "average over 1,000 steps; x: agent steps. Means over {seeds} seeds with 95 % confidence bands. Not in "
-               "the paper.",
-               _one(lambda p, ax: an.plot_error_without_spread(p["single_agent.spread"], p["single_agent.z_mean"],
-                                                               ax, "eps"), size=(10, 3.8))),
-        Figure("multi_agent_error_without_spread", ("multi_agent.spread", "multi_agent.z_mean"),
-               "The same for two agents, ε-greedy (fig. 17's setting), the mean of both agents: the MDN-RNN's error "
-               "against the posterior mean with the paper's sampled latents (red, `multi_agent.spread`: its "
-               "curiosity minus the recorded spread) and with the posterior mean as the latent (blue, "
-               "`multi_agent.z_mean`: the paper's settings but `z=mean`, its curiosity, all of it error). y: squared "
-               "latent distance, unitless, moving average over 1,000 steps; x: agent steps. Means over {seeds} seeds "
-               "with 95 % confidence bands. Not in the paper.",
-               _one(lambda p, ax: an.plot_error_without_spread(p["multi_agent.spread"], p["multi_agent.z_mean"],
-                                                               ax, "eps"), size=(10, 3.8))),
+        _error_without_spread_figure("single_agent_error_without_spread", "single_agent", 1, "fig. 8's setting"),
+        _error_without_spread_figure("multi_agent_error_without_spread", "multi_agent", 2, "fig. 17's setting"),
         *_temperature_figures("boltzmann_temperatures", "Boltzmann temperatures T = 0.5 to 2.5", "0.5", "2.5",
                               curves="Paper: fig. 19.", actions="Paper: fig. 19 shows only curiosity."),
         *_temperature_figures("boltzmann_low_temperatures",
