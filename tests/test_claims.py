@@ -385,6 +385,44 @@ def test_curiosity_parts_put_a_planted_rise_in_the_spread_not_the_error():
         an.curiosity_parts(s, g)
 
 
+def test_agents_parts_compare_each_part_over_claim_3s_window_policy_by_policy():
+    # One agent ran 40,000 steps of eps and UCB, two agents 30,000 of eps: only eps pairs, over
+    # steps 15,000-30,000. Planted: a second agent doubles the error and lowers the spread, so the
+    # curiosity as a whole hardly moves; outside the window the spread is far off, to show it is
+    # not read. A z=mean sweep (no spread in its curiosity) is left out.
+    rng = np.random.default_rng(11)
+    one = fake_sweep("single_agent.spread", 1, [("eps", 0.2), ("ucb", 1.0)], 2000, seeds=4)
+    two = fake_sweep("multi_agent.spread", 2, [("eps", 0.2)], 1500, seeds=5)
+    mean_latent = fake_sweep("multi_agent.z_mean", 2, [("eps", 0.2)], 1500, seeds=5, z="mean")
+    truth = {}
+    for s, error, spread in ((one, 0.05, 0.40), (two, 0.10, 0.35)):
+        shape = s.metrics["curiosity"].shape
+        inside = (s.steps > 15_000) & (s.steps <= 30_000)
+        s.metrics["curiosity_spread"][:] = np.where(inside, spread, 9.0)[None, :, None] + 0.01 * rng.normal(size=shape)
+        run_error = error + 0.01 * rng.normal(size=(shape[0], 1, 1))
+        s.metrics["curiosity"][:] = s.metrics["curiosity_spread"] + run_error + 0.01 * rng.normal(size=shape)
+        g = s.groups("eps")[0]
+        c = s.metrics["curiosity"][g.indices][:, inside].astype(float).mean(axis=2)  # the metrics are float32
+        v = s.metrics["curiosity_spread"][g.indices][:, inside].astype(float).mean(axis=2)
+        truth[s.n_agents] = {"curiosity": c.mean(1), "spread": v.mean(1), "error": (c - v).mean(1)}
+    t = an.agents_parts_table({"single_agent.spread": one, "multi_agent.spread": two, "multi_agent.z_mean": mean_latent})
+    assert [(v["group"], v["part"]) for v in t.values] == [("ε-greedy (ε=0.2)", p) for p in an.PARTS]
+    assert {(v["from"], v["to"]) for v in t.values} == {(15_000, 30_000)} and "steps 15,000-30,000" in t.note
+    for v in t.values:
+        a, b = truth[1][v["part"]], truth[2][v["part"]]
+        assert v["one_mean"] == pytest.approx(a.mean(), abs=1e-9) and v["two_mean"] == pytest.approx(b.mean(), abs=1e-9)
+        assert v["diff"] == pytest.approx(b.mean() - a.mean(), abs=1e-9)
+        se = math.sqrt(a.var(ddof=1) / len(a) + b.var(ddof=1) / len(b))
+        assert v["t"] == pytest.approx((b.mean() - a.mean()) / se, rel=1e-9)
+    rows = {v["part"]: v for v in t.values}
+    assert rows["error"]["diff"] == pytest.approx(0.05, abs=0.02) and rows["error"]["p"] < 0.001
+    assert rows["spread"]["diff"] == pytest.approx(-0.05, abs=0.01) and rows["spread"]["p"] < 0.001
+    assert abs(rows["curiosity"]["diff"]) < 0.03
+    assert t.rows[0][:2] == ["`single_agent.spread` / `multi_agent.spread`", "ε-greedy (ε=0.2)"]
+    # Without a two-agent sweep that samples its latents and records the spread: no rows.
+    assert an.agents_parts_table({"single_agent.spread": one, "multi_agent.z_mean": mean_latent}).rows == []
+
+
 def test_two_agents_higher_compares_the_same_steps_when_one_sweep_is_longer():
     # Curiosity and loss drift upward with training alike for one and two agents; the two-agent
     # sweep ran 20,000 steps, the one-agent sweep 15,000. Only the common steps are comparable.

@@ -420,8 +420,14 @@ def test_page_blocks_on_the_tiny_sweeps(results, tiny_sweeps_dir, tmp_path):
     # The tiny sweeps record the spread: claim 1's three parts per group of each preset they stand
     # for; 200 steps fill the early block (steps 0-2k) alone.
     block = results.curiosity_parts_block(presets, dims=tmp_path / "no_posterior_dims.json")
-    parts = [r.split(" | ") for r in block.splitlines()[2:] if r.startswith("| ")]
+    first, agents = block.split("\n\n| sweeps (one agent / two) |")  # claim 1's table, then claim 3's
+    parts = [r.split(" | ") for r in first.splitlines()[2:] if r.startswith("| ")]
     assert len(parts) == 3 * sum(len(s.groups()) for s in presets.values())
+    # Claim 3's: every one-agent name of the tiny one-agent sweep against every two-agent name of the
+    # two-agent sweep, the groups they share (eps and UCB), three parts each.
+    n_one, n_two = (sum(s is presets[k] for s in presets.values()) for k in ("single_agent", "multi_agent"))
+    shared = {g.label for g in presets["single_agent"].groups()} & {g.label for g in presets["multi_agent"].groups()}
+    assert sum(r.startswith("| `") for r in agents.splitlines()) == n_one * n_two * len(shared) * 3 > 0
     assert [r[3] for r in parts[:3]] == list(an.PARTS.values())
     assert all(float(r[4]) > 0 and r[5:9] == ["n/a"] * 4 for r in parts if r[3] != "error against the posterior mean")
     temperatures = results.temperatures_block(presets)

@@ -48,10 +48,10 @@ orbax for checkpoints); plotting needs matplotlib.
 The package, by job; each module imports only those above it (sweeps none; stats, recon and
 action_values sweeps; curiosity_noise sweeps and action_values; tables sweeps and stats;
 significance none; self_model significance, stats and sweeps; claims self_model, significance,
-sweeps, stats and tables; curiosity_parts claims, stats, sweeps and tables; temperatures claims,
-significance, stats and tables; power claims, significance and tables; walls claims, power,
-significance, stats, sweeps and tables; figures sweeps, stats, recon, action_values,
-curiosity_parts, self_model and temperatures):
+sweeps, stats and tables; curiosity_parts claims, significance, stats, sweeps and tables;
+temperatures claims, significance, stats and tables; power claims, significance and tables; walls
+claims, power, significance, stats, sweeps and tables; figures sweeps, stats, recon,
+action_values, curiosity_parts, self_model and temperatures):
 
     sweeps    loading: `load`, `find_sweeps`, `load_sweeps`, `merge_sweeps` (one experiment's seeds
               from several sweeps), `join_seed_parts` (every such experiment of a list merged),
@@ -91,7 +91,8 @@ curiosity_parts, self_model and temperatures):
     curiosity_parts  claim 1's fall and rise split into the world model's error against the posterior
               mean and the posterior's spread, from sweeps that record the spread:
               `curiosity_parts_table`, `parts_fall_rise`, `curiosity_parts`, `records_spread`,
-              `samples_latent` (z=sample; under z=mean the curiosity is all error)
+              `samples_latent` (z=sample; under z=mean the curiosity is all error); and claim 3
+              (one agent against two) part by part: `agents_parts_table`
     walls     what a different texture on every wall changes: `walls_table` (each walls-different
               preset against its identical-walls preset, per policy) and `walls_measures`
     figures   every `plot_*` function, the colours and labels they share, and saving
@@ -141,6 +142,7 @@ from mjx_curio.analysis.claims import (
 from mjx_curio.analysis.curiosity_parts import (
     MEAN_LATENT_PART,
     PARTS,
+    agents_parts_table,
     curiosity_parts,
     curiosity_parts_table,
     parts_fall_rise,
@@ -258,8 +260,8 @@ __all__ = [
     # curiosity_noise
     "CuriosityNoise", "curiosity_noise", "posterior_dims", "posterior_spread",
     # curiosity_parts
-    "MEAN_LATENT_PART", "PARTS", "curiosity_parts", "curiosity_parts_table", "parts_fall_rise", "records_spread",
-    "samples_latent",
+    "MEAN_LATENT_PART", "PARTS", "agents_parts_table", "curiosity_parts", "curiosity_parts_table", "parts_fall_rise",
+    "records_spread", "samples_latent",
     # tables
     "Table", "headline_table",
     # temperatures

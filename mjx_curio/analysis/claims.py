@@ -252,9 +252,9 @@ def curiosity_fall_rise(sweep: Sweep, group: Group) -> dict:
 def fall_rise(sweep: Sweep, c: np.ndarray) -> dict:
     """`curiosity_fall_rise` of any per-run series c [runs, windows] of `sweep`."""
     t = sweep.steps_done
-    early = _block_mean(sweep, c, 0, 2_000)
-    trough = _block_mean(sweep, c, 10_000, 30_000)
-    late = _block_mean(sweep, c, max(t - 10_000, 30_000), t)
+    early = block_mean(sweep, c, 0, 2_000)
+    trough = block_mean(sweep, c, 10_000, 30_000)
+    late = block_mean(sweep, c, max(t - 10_000, 30_000), t)
     return {"early": early, "trough": trough, "late": late, "fall": early - trough, "rise": late - trough}
 
 
@@ -338,9 +338,9 @@ def claim_two_agents_higher(presets: Mapping[str, Sweep]) -> ClaimResult:
     # later half would not be comparable with a shorter one's.
     common = min(single.steps_done, multi.steps_done)
     lo, hi = common // 2, common
-    cur = {w: _block_mean(s, _nanmean(s.metrics["curiosity"][g.indices].astype(float), axis=2), lo, hi)
+    cur = {w: block_mean(s, _nanmean(s.metrics["curiosity"][g.indices].astype(float), axis=2), lo, hi)
            for w, s, g in (("single", single, gs), ("multi", multi, gm))}
-    vae = {w: _block_mean(s, per_agent_vae_loss(s)[g.indices].astype(float), lo, hi)
+    vae = {w: block_mean(s, per_agent_vae_loss(s)[g.indices].astype(float), lo, hi)
            for w, s, g in (("single", single, gs), ("multi", multi, gm))}
     values, parts, fails, tests = {}, [], [], {}
     for what, d in (("curiosity", cur), ("VAE loss per image", vae)):
@@ -943,7 +943,7 @@ def _nanmean(x, axis):
         return np.nanmean(x, axis=axis)
 
 
-def _block_mean(sweep: Sweep, x: np.ndarray, start: int, end: int) -> np.ndarray:
+def block_mean(sweep: Sweep, x: np.ndarray, start: int, end: int) -> np.ndarray:
     """Mean over axis 1 of x [n, windows] of the windows lying wholly in steps [start, end);
     NaN where none does."""
     e = sweep.metrics_every
