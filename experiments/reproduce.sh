@@ -80,6 +80,10 @@
 # and for two agents under UCB (fig. 18's setting), the same length and speed:
 #     python -m mjx_curio.sweep preset=multi_agent policies=ucb seeds=4 steps=40000 checkpoint_every=1000 out=runs/paper/multi_agent.spread_ucb
 #     python experiments/spread_evidence.py runs/paper/multi_agent.spread_ucb
+# and for one UCB agent (claim 3's setting, beside the two above; 51 min alone on the Intel Xeon
+# above, 46-54 run-steps/s):
+#     python -m mjx_curio.sweep preset=single_agent policies=ucb seeds=4 steps=40000 checkpoint_every=1000 out=runs/paper/single_agent.spread_ucb
+#     python experiments/spread_evidence.py runs/paper/single_agent.spread_ucb
 # The same side experiment with the posterior mean as the latent (z=mean, not the paper's
 # setting: the curiosity is then the world model's error alone), 4 seeds x 40,000 steps (49 min
 # on the Intel Xeon above, 46-59 run-steps/s), not run by this script either:
