@@ -412,11 +412,11 @@ def test_page_blocks_on_the_tiny_sweeps(results, tiny_sweeps_dir, tmp_path):
     presets["boltzmann_low_temperatures"] = presets["multi_agent.order"] = presets["multi_agent"]
     presets["multi_agent.per_step"] = presets["multi_agent"]
     presets["single_agent_walls_different"] = presets["single_agent.spread"] = presets["single_agent"]
-    presets["single_agent.z_mean"] = presets["single_agent"]
+    presets["single_agent.z_mean"] = presets["single_agent.spread_ucb"] = presets["single_agent"]
     presets["multi_agent.spread"] = presets["multi_agent.spread_ucb"] = presets["multi_agent"]
     presets["multi_agent.z_mean"] = presets["multi_agent"]
     results.figures_block(presets, out=tmp_path / "all")
-    assert len(list((tmp_path / "all").glob("*.png"))) == len(results._figures()) == 23
+    assert len(list((tmp_path / "all").glob("*.png"))) == len(results._figures()) == 24
     # The tiny sweeps record the spread: claim 1's three parts per group of each preset they stand
     # for; 200 steps fill the early block (steps 0-2k) alone.
     block = results.curiosity_parts_block(presets, dims=tmp_path / "no_posterior_dims.json")
