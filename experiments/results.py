@@ -197,8 +197,8 @@ def temperatures_block(presets: dict) -> str:
 
 def curiosity_parts_block(presets: dict, dims: pathlib.Path = POSTERIOR_DIMS) -> str:
     """Claim 1's fall and rise split into error and spread (`analysis.curiosity_parts_table`),
-    from the sweeps that record the spread, and claim 3 split so where one agent and two ran the
-    same policy (`analysis.agents_parts_table`); then, from posterior_dims.json, each sweep's spread
+    from the sweeps that record the spread, and claim 3 split the same way wherever one agent and
+    two ran the same policy (`analysis.agents_parts_table`); then, from posterior_dims.json, each sweep's spread
     and latent dimensions near the prior checkpoint by checkpoint (`posterior_dims_table`)."""
     from mjx_curio import analysis as an
 

@@ -122,8 +122,8 @@ def agents_parts_table(presets: Mapping[str, Sweep]) -> Table:
                 for part, what in PARTS.items():
                     x1, x2 = block_mean(one, p1[part], lo, hi), block_mean(two, p2[part], lo, hi)
                     m1, m2, w = mean_ci(x1), mean_ci(x2), welch_t(x2, x1)
-                    rows.append([f"`{one_name}` / `{two_name}`", g1.label, what, _ci(m1), str(g1.n), _ci(m2), str(g2.n), _f(w["diff"]),
-                                 f"{w['p']:.3g}" if np.isfinite(w["p"]) else "n/a"])
+                    rows.append([f"`{one_name}` / `{two_name}`", g1.label, what, _ci(m1), str(g1.n), _ci(m2),
+                                 str(g2.n), _f(w["diff"]), f"{w['p']:.3g}" if np.isfinite(w["p"]) else "n/a"])
                     values.append({"one": one_name, "two": two_name, "group": g1.label, "part": part,
                                    "from": lo, "to": hi, "one_mean": float(m1[0]), "two_mean": float(m2[0]),
                                    "diff": w["diff"], "t": w["t"], "p": w["p"]})
