@@ -219,6 +219,12 @@ def test_temperatures_anova_on_planted_late_curiosity():
     r = cl.claim_temperatures_alike({"boltzmann_temperatures": s})
     assert r.values["p"] > 0.5 and r.values["p_blocked"] < 0.05, r.values
     assert r.verdict.startswith("does not hold") and "blocked by seed (3 seeds" in r.statistic, r.verdict
+    # The equivalence bound beside it: temperatures 0.02 apart at most, a residual of 0.001 (I - 1/3)
+    # (sum of squares 2e-6 on 4 degrees of freedom), so 0.02 + t(0.95, 4) sqrt(2 x 5e-7 / 3) (the
+    # metrics are float32: to 1e-6).
+    assert r.values["largest_difference"] == pytest.approx(0.02, abs=1e-6)
+    assert r.values["equivalence_bound"] == pytest.approx(0.02 + 2.131847 * math.sqrt(2 * 5e-7 / 3), abs=1e-6)
+    assert "rule out differences beyond ±0.0212" in r.statistic, r.statistic
     # Temperatures that ran different seeds form no block: the one-way test decides.
     s.metrics["curiosity"][:, 1500:, :] = late[:, None, None]
     hot = max(s.groups("boltzmann"), key=lambda g: g.value)

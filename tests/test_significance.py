@@ -101,6 +101,45 @@ def test_block_anova_removes_block_levels_that_the_one_way_test_counts_as_error(
     assert exact["F"] == math.inf and exact["p"] == 0.0
     assert math.isnan(sig.block_anova(y[:, :1])["p"])
 
+
+def test_t_critical_inverts_the_tail():
+    # df = 1 is the Cauchy distribution: P(|T| >= t) = alpha at t = tan(pi (1 - alpha) / 2).
+    for alpha in (0.05, 0.1, 0.01):
+        assert sig.t_critical(1, alpha) == pytest.approx(math.tan(math.pi * (1 - alpha) / 2), rel=1e-9)
+    assert sig.t_critical(3, 0.1) == pytest.approx(2.353363, abs=1e-6)  # the one-sided 95 % point (tables)
+    assert math.isnan(sig.t_critical(0))
+
+
+def test_equivalence_bound_of_two_treatments_is_the_paired_interval():
+    # The table of the paired t test above: differences 1, 2, 2, 1, mean 1.5, sd sqrt(1/3). The
+    # two one-sided tests at 5 % pass for every margin beyond the far end of the 90 % interval of
+    # the paired difference, 1.5 + t(0.95, 3) sqrt(1/3) / 2.
+    y = np.array([[1.0, 2, 3, 4], [2, 4, 5, 5]])
+    e = sig.equivalence_bound(y)
+    assert (e["largest"], e["df"]) == (1.5, 3) and e["se"] == pytest.approx(math.sqrt(1 / 3) / 2)
+    assert e["bound"] == pytest.approx(1.5 + 2.353363 * math.sqrt(1 / 3) / 2, abs=1e-6)
+    # Block levels change nothing; a block with a NaN is left out; no residual, no bound.
+    assert sig.equivalence_bound(y + np.array([0.0, 7.0, -3.0, 1.0]))["bound"] == pytest.approx(e["bound"])
+    assert sig.equivalence_bound(np.concatenate([y, [[np.nan], [9.0]]], axis=1))["bound"] == pytest.approx(e["bound"])
+    assert math.isnan(sig.equivalence_bound(y[:, :1])["bound"])
+
+
+@pytest.mark.parametrize("means,level", [((0.0, 1.0), "at"), ((0.0, 0.5, 1.0, 1.0), "below")])
+def test_equivalence_bound_keeps_its_level(means, level):
+    # Simulated block designs (6 seeds, unit noise, seeds with levels of their own) whose two most
+    # distant treatments are exactly D apart: the bound falls below D, calling them equivalent
+    # at D, in 5 % of tables when two treatments are compared, and in no more when the other
+    # pairs must pass too (the intersection-union test is conservative).
+    rng, b, d, reps = np.random.default_rng(0), 6, 3.0, 3000
+    k = len(means)
+    y = d * np.array(means)[None, :, None] + rng.normal(0, 1, (reps, k, b)) + rng.normal(0, 4, (reps, 1, b))
+    called = np.mean([sig.equivalence_bound(t)["bound"] < d for t in y])
+    sd = math.sqrt(0.05 * 0.95 / reps)  # the binomial spread of the rate, 0.004
+    if level == "at":
+        assert called == pytest.approx(0.05, abs=4 * sd), called
+    else:
+        assert called <= 0.05 + 4 * sd, called
+
 def test_pearson_r_known_values():
     x = np.arange(10.0)
     assert sig.pearson_r(x, 3 * x + 1) == pytest.approx(1.0)

@@ -76,8 +76,8 @@ action_values, curiosity_parts, self_model and temperatures):
               `posterior_dims`, that variance dimension by dimension
     tables    the headline table: `headline_table` and its `Table` (Markdown, CSV)
     significance  the tests, in NumPy alone: `welch_t`, `one_way_anova`, `block_anova`,
-              `pearson_r`, `fisher_z`, and the t and F tails behind them (`t_pvalue`, `f_pvalue`,
-              `betainc`)
+              `equivalence_bound`, `pearson_r`, `fisher_z`, and the t and F tails behind them
+              (`t_pvalue`, `f_pvalue`, `t_critical`, `betainc`)
     self_model  does the self-model track the curiosity obtained step by step (claim 8): the
               window moments sweeps record, pooled within windows (`step_tracking`,
               `tracking_over_time`, `records_steps`, `STEP_METRICS`)
@@ -153,10 +153,12 @@ from mjx_curio.analysis.self_model import STEP_METRICS, records_steps, step_trac
 from mjx_curio.analysis.significance import (
     betainc,
     block_anova,
+    equivalence_bound,
     f_pvalue,
     fisher_z,
     one_way_anova,
     pearson_r,
+    t_critical,
     t_pvalue,
     welch_t,
 )
@@ -273,7 +275,8 @@ __all__ = [
     # self_model
     "STEP_METRICS", "records_steps", "step_tracking", "tracking_over_time",
     # significance
-    "betainc", "block_anova", "f_pvalue", "fisher_z", "one_way_anova", "pearson_r", "t_pvalue", "welch_t",
+    "betainc", "block_anova", "equivalence_bound", "f_pvalue", "fisher_z", "one_way_anova", "pearson_r",
+    "t_critical", "t_pvalue", "welch_t",
     # claims
     "CLAIMS", "ClaimResult", "Tested", "VERDICTS", "action_shares", "agent_curiosity_coupling", "assign_presets",
     "balanced_rotation_share", "claim_agents_move_together", "claim_boltzmann_trembles",

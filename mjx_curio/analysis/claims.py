@@ -59,7 +59,7 @@ from mjx_curio.analysis.stats import (
     per_agent_vae_loss,
     turn_reversals,
 )
-from mjx_curio.analysis.significance import block_anova, fisher_z, one_way_anova, pearson_r, welch_t
+from mjx_curio.analysis.significance import block_anova, equivalence_bound, fisher_z, one_way_anova, pearson_r, welch_t
 from mjx_curio.analysis.self_model import records_steps, step_tracking, trailing_sum
 from mjx_curio.analysis.sweeps import Group, Sweep, SweepError, load_sweeps, merge_sweeps, side_experiment
 from mjx_curio.analysis.tables import Table
@@ -694,6 +694,12 @@ def claim_temperatures_alike(presets: Mapping[str, Sweep]) -> ClaimResult:
     if use_blocked:
         stat += (f"; blocked by seed ({blocked['b']} seeds, {_f(100 * blocked['block_share'], 2)} % of the variance) "
                  f"F({blocked['df1']}, {blocked['df2']})={_f(blocked['F'])}, p={_p(blocked['p'])}")
+        eq = equivalence_bound(table, ALPHA)
+        values.update(equivalence_bound=_num(eq["bound"]), largest_difference=_num(eq["largest"]))
+        if math.isfinite(eq["bound"]):
+            stat += (f"; equivalence (context, not the verdict: two one-sided tests at 5 % for every two "
+                     f"temperatures, blocked by seed): the data rule out differences beyond ±{_f(eq['bound'])} "
+                     f"(largest observed {_f(eq['largest'])})")
     p = blocked["p"] if use_blocked else a["p"]
     gaps = []
     if len(gs) < 2:

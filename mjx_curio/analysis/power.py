@@ -26,7 +26,7 @@ import math
 import numpy as np
 
 from mjx_curio.analysis.claims import ALPHA, Tested, _num, claim_results
-from mjx_curio.analysis.significance import block_anova, finite, t_pvalue
+from mjx_curio.analysis.significance import block_anova, finite, t_critical
 from mjx_curio.analysis.tables import Table
 
 POWER = 0.8
@@ -52,21 +52,6 @@ def noncentral_t_sf(c: float, df: float, ncp: float) -> float:
     log_pdf = math.log(2.0) + half * math.log(half) - math.lgamma(half) + (df - 1.0) * np.log(u) - half * u * u
     phi = np.array([0.5 * math.erfc(-(ncp - c * ui) / math.sqrt(2.0)) for ui in u])
     return float(np.clip((w * np.exp(log_pdf) * phi).sum(), 0.0, 1.0))
-
-
-def t_critical(df: float, alpha: float = ALPHA) -> float:
-    """The t a two-sided test at level `alpha` must exceed: P(|T| >= t) = alpha, `df` real."""
-    if not (df > 0 and math.isfinite(df)):
-        return math.nan
-    lo, hi = 0.0, 1.0
-    while t_pvalue(hi, df) > alpha:
-        lo, hi = hi, 2.0 * hi
-    for _ in range(200):
-        mid = (lo + hi) / 2.0
-        lo, hi = (mid, hi) if t_pvalue(mid, df) > alpha else (lo, mid)
-        if hi - lo < 1e-12 * hi:
-            break
-    return (lo + hi) / 2.0
 
 
 def t_power(ncp: float, df: float, alpha: float = ALPHA) -> float:

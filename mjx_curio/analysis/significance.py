@@ -1,5 +1,6 @@
-"""Significance tests in NumPy and the standard library: Student t and F tails, Welch's t, one-way
-and block ANOVA, Pearson's r and Fisher's z.
+"""Significance tests in NumPy and the standard library: Student t and F tails and the t a test must
+exceed, Welch's t, one-way and block ANOVA, the equivalence bound of a block design, Pearson's r
+and Fisher's z.
 
 The tails come from the regularised incomplete beta function (`betainc`, a continued fraction),
 so the analysis needs no SciPy; the tests check them against closed forms and hand computations.
@@ -64,6 +65,21 @@ def f_pvalue(f: float, df1: float, df2: float) -> float:
     if f <= 0:
         return 1.0
     return betainc(df2 / 2.0, df1 / 2.0, df2 / (df2 + df1 * f))
+
+
+def t_critical(df: float, alpha: float = 0.05) -> float:
+    """The t a two-sided test at level `alpha` must exceed: P(|T| >= t) = alpha, `df` real."""
+    if not (df > 0 and math.isfinite(df)):
+        return math.nan
+    lo, hi = 0.0, 1.0
+    while t_pvalue(hi, df) > alpha:
+        lo, hi = hi, 2.0 * hi
+    for _ in range(200):
+        mid = (lo + hi) / 2.0
+        lo, hi = (mid, hi) if t_pvalue(mid, df) > alpha else (lo, mid)
+        if hi - lo < 1e-12 * hi:
+            break
+    return (lo + hi) / 2.0
 
 
 def welch_t(x, y) -> dict:
@@ -142,6 +158,32 @@ def block_anova(table) -> dict:
         return out
     f = (ss_treat / out["df1"]) / (ss_error / out["df2"])
     out.update(F=float(f), p=f_pvalue(f, out["df1"], out["df2"]))
+    return out
+
+
+def equivalence_bound(table, alpha: float = 0.05) -> dict:
+    """How alike the treatments of a [treatments, blocks] table are shown to be: the smallest margin
+    D at which two one-sided tests (TOST) at level `alpha` find every two treatments' means within
+    +-D of each other. For one pair it is |difference| + t(1 - alpha) x its standard error, the far
+    end of the (1 - 2 alpha) interval; every pair must pass for all of them to be called
+    equivalent, so the bound is the largest of these, and the intersection-union principle keeps
+    the level at `alpha` without a correction for the number of pairs. The standard error is the
+    block ANOVA's (`block_anova`): sqrt(2 ms_error / b) on (k - 1)(b - 1) degrees of freedom,
+    blocks with a NaN left out as there. A "no difference" verdict from a p-value says only that
+    none was found; this says how large a difference the data rule out.
+
+    {"bound", "largest" (the largest |difference| between two treatments' means), "se", "df"};
+    NaN where `block_anova` has no residual mean square."""
+    y = np.asarray(table, float)
+    y = y[:, np.isfinite(y).all(axis=0)]
+    a = block_anova(y)
+    out = {"bound": math.nan, "largest": math.nan, "se": math.nan, "df": a["df2"]}
+    if not math.isfinite(a["ms_error"]):
+        return out
+    means = y.mean(axis=1)
+    out["largest"] = float(means.max() - means.min())
+    out["se"] = math.sqrt(2.0 * a["ms_error"] / a["b"])
+    out["bound"] = out["largest"] + t_critical(a["df2"], 2.0 * alpha) * out["se"]
     return out
 
 
