@@ -839,7 +839,12 @@ def test_walls_table_on_planted_runs():
     # Not significant (p ~ 0.4): the seeds a side for 80 % power at the difference seen, in the cell.
     need = an.seeds_needed(cl.Tested(np.array([1.0, 2.0]), np.array([0.5, 1.0, 1.5])))
     assert v["curiosity p"] > 0.05 and v["curiosity seeds for 80 % power"] == need and 8 < need < 10_000
-    assert t.rows[0][3] == f"1.5 vs 1 (p = {v['curiosity p']:.2g}; {int(need)} seeds)"
+    # And the bound two one-sided tests put on it: 0.5 + t(0.95, df) sqrt(1/4 + 1/12), with Welch's
+    # df = (1/3)^2 / ((1/4)^2 / 1 + (1/12)^2 / 2); ten times that for the VAE loss.
+    bound = 0.5 + an.t_critical((1 / 3) ** 2 / (1 / 16 + 1 / 288), 0.1) * math.sqrt(1 / 3)
+    assert v["curiosity equivalence bound"] == pytest.approx(bound) and 1.0 < bound < 5.0
+    assert v["vae_loss equivalence bound"] == pytest.approx(10 * bound)
+    assert t.rows[0][3] == f"1.5 vs 1 (p = {v['curiosity p']:.2g}; Δ within ±{bound:.3g}; {int(need)} seeds)"
     # The identical-walls side the larger: the same count (a two-sided test); a significant
     # difference, or none at all, has no count.
     from mjx_curio.analysis import walls

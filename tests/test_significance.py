@@ -36,7 +36,7 @@ def test_welch_t_two_by_two_by_hand():
     d = 3.0
     w = sig.welch_t(np.array([-1.0, 1.0]) + d, np.array([-1.0, 1.0]))
     t = d / math.sqrt(2)
-    assert w["diff"] == pytest.approx(d)
+    assert w["diff"] == pytest.approx(d) and w["se"] == pytest.approx(math.sqrt(2))
     assert w["t"] == pytest.approx(t)
     assert w["df"] == pytest.approx(2)
     assert w["p"] == pytest.approx(1 - t / math.sqrt(2 + t * t))
@@ -122,6 +122,16 @@ def test_equivalence_bound_of_two_treatments_is_the_paired_interval():
     assert sig.equivalence_bound(y + np.array([0.0, 7.0, -3.0, 1.0]))["bound"] == pytest.approx(e["bound"])
     assert sig.equivalence_bound(np.concatenate([y, [[np.nan], [9.0]]], axis=1))["bound"] == pytest.approx(e["bound"])
     assert math.isnan(sig.equivalence_bound(y[:, :1])["bound"])
+
+
+def test_tost_bound_is_the_far_end_of_the_90_percent_interval():
+    # The welch test above (difference 3, se sqrt(2), df 2): its 90 % interval reaches
+    # 3 + t(0.95, 2) sqrt(2), with t(0.95, 2) = 2.919986 (tables); the sign does not matter.
+    assert sig.tost_bound(3.0, math.sqrt(2), 2) == pytest.approx(3 + 2.919986 * math.sqrt(2), abs=1e-5)
+    assert sig.tost_bound(-3.0, math.sqrt(2), 2) == sig.tost_bound(3.0, math.sqrt(2), 2)
+    assert sig.tost_bound(3.0, math.sqrt(2), 2, alpha=0.025) == pytest.approx(
+        3 + sig.t_critical(2, 0.05) * math.sqrt(2))  # alpha = 0.025 a side: the 95 % interval
+    assert math.isnan(sig.tost_bound(math.nan, 1.0, 5)) and math.isnan(sig.tost_bound(1.0, math.nan, 5))
 
 
 @pytest.mark.parametrize("means,level", [((0.0, 1.0), "at"), ((0.0, 0.5, 1.0, 1.0), "below")])

@@ -76,8 +76,8 @@ action_values, curiosity_parts, self_model and temperatures):
               `posterior_dims`, that variance dimension by dimension
     tables    the headline table: `headline_table` and its `Table` (Markdown, CSV)
     significance  the tests, in NumPy alone: `welch_t`, `one_way_anova`, `block_anova`,
-              `equivalence_bound`, `pearson_r`, `fisher_z`, and the t and F tails behind them
-              (`t_pvalue`, `f_pvalue`, `t_critical`, `betainc`)
+              `equivalence_bound` and `tost_bound` (two one-sided tests), `pearson_r`, `fisher_z`,
+              and the t and F tails behind them (`t_pvalue`, `f_pvalue`, `t_critical`, `betainc`)
     self_model  does the self-model track the curiosity obtained step by step (claim 8): the
               window moments sweeps record, pooled within windows (`step_tracking`,
               `tracking_over_time`, `records_steps`, `STEP_METRICS`)
@@ -160,6 +160,7 @@ from mjx_curio.analysis.significance import (
     pearson_r,
     t_critical,
     t_pvalue,
+    tost_bound,
     welch_t,
 )
 from mjx_curio.analysis.figures import (
@@ -276,7 +277,7 @@ __all__ = [
     "STEP_METRICS", "records_steps", "step_tracking", "tracking_over_time",
     # significance
     "betainc", "block_anova", "equivalence_bound", "f_pvalue", "fisher_z", "one_way_anova", "pearson_r",
-    "t_critical", "t_pvalue", "welch_t",
+    "t_critical", "t_pvalue", "tost_bound", "welch_t",
     # claims
     "CLAIMS", "ClaimResult", "Tested", "VERDICTS", "action_shares", "agent_curiosity_coupling", "assign_presets",
     "balanced_rotation_share", "claim_agents_move_together", "claim_boltzmann_trembles",

@@ -1,5 +1,5 @@
 """Significance tests in NumPy and the standard library: Student t and F tails and the t a test must
-exceed, Welch's t, one-way and block ANOVA, the equivalence bound of a block design, Pearson's r
+exceed, Welch's t, one-way and block ANOVA, equivalence bounds (two one-sided tests), Pearson's r
 and Fisher's z.
 
 The tails come from the regularised incomplete beta function (`betainc`, a continued fraction),
@@ -83,10 +83,11 @@ def t_critical(df: float, alpha: float = 0.05) -> float:
 
 
 def welch_t(x, y) -> dict:
-    """Welch's unequal-variance t-test of mean(x) - mean(y) (NaNs dropped): {"diff", "t", "df",
-    "p" (two-sided), "nx", "ny"}; t, df and p are NaN below 2 values a side or with no spread."""
+    """Welch's unequal-variance t-test of mean(x) - mean(y) (NaNs dropped): {"diff", "se" (its
+    standard error), "t", "df", "p" (two-sided), "nx", "ny"}; se, t, df and p are NaN below 2
+    values a side or with no spread."""
     x, y = finite(x), finite(y)
-    out = {"diff": math.nan, "t": math.nan, "df": math.nan, "p": math.nan, "nx": len(x), "ny": len(y)}
+    out = {"diff": math.nan, "se": math.nan, "t": math.nan, "df": math.nan, "p": math.nan, "nx": len(x), "ny": len(y)}
     if len(x) and len(y):
         out["diff"] = float(x.mean() - y.mean())
     if len(x) < 2 or len(y) < 2:
@@ -98,8 +99,18 @@ def welch_t(x, y) -> dict:
     t = out["diff"] / math.sqrt(se2)
     df = se2**2 / (vx**2 / (len(x) - 1) + vy**2 / (len(y) - 1)) if vx > 0 and vy > 0 else (
         len(x) - 1 if vx > 0 else len(y) - 1)
-    out.update(t=float(t), df=float(df), p=t_pvalue(t, df))
+    out.update(se=math.sqrt(se2), t=float(t), df=float(df), p=t_pvalue(t, df))
     return out
+
+
+def tost_bound(diff: float, se: float, df: float, alpha: float = 0.05) -> float:
+    """The smallest margin D at which two one-sided tests (TOST) at level `alpha` call a difference
+    `diff` with standard error `se` on `df` degrees of freedom equivalent to none, |difference| <
+    D: |diff| + t(1 - alpha, df) se, the far end of its (1 - 2 alpha) interval. Where a test finds
+    no difference, this says how large a one the data rule out. NaN where se or df is undefined."""
+    if not (math.isfinite(diff) and math.isfinite(se) and se >= 0):
+        return math.nan
+    return abs(diff) + t_critical(df, 2.0 * alpha) * se
 
 
 def one_way_anova(groups: Sequence) -> dict:
@@ -167,7 +178,8 @@ def equivalence_bound(table, alpha: float = 0.05) -> dict:
     +-D of each other. For one pair it is |difference| + t(1 - alpha) x its standard error, the far
     end of the (1 - 2 alpha) interval; every pair must pass for all of them to be called
     equivalent, so the bound is the largest of these, and the intersection-union principle keeps
-    the level at `alpha` without a correction for the number of pairs. The standard error is the
+    the level at `alpha` without a correction for the number of pairs (`tost_bound` of the largest
+    difference, as every pair has the same standard error). The standard error is the
     block ANOVA's (`block_anova`): sqrt(2 ms_error / b) on (k - 1)(b - 1) degrees of freedom,
     blocks with a NaN left out as there. A "no difference" verdict from a p-value says only that
     none was found; this says how large a difference the data rule out.
@@ -183,7 +195,7 @@ def equivalence_bound(table, alpha: float = 0.05) -> dict:
     means = y.mean(axis=1)
     out["largest"] = float(means.max() - means.min())
     out["se"] = math.sqrt(2.0 * a["ms_error"] / a["b"])
-    out["bound"] = out["largest"] + t_critical(a["df2"], 2.0 * alpha) * out["se"]
+    out["bound"] = tost_bound(out["largest"], out["se"], a["df2"], alpha)  # every pair's se is the same
     return out
 
 

@@ -3,8 +3,9 @@ of the same agents with identical walls, policy by policy, over the steps both r
 (`walls_table`). The paper runs both arenas (its section 3.1) but names only one one-agent run as
 having different walls, and compares nothing; this table is the comparison it leaves out.
 
-Runs are the units (Welch's t-test across seeds); where a difference is not significant, the
-seeds a side the test would need to find it 8 times in 10 (`power.seeds_needed`, the observed
+Runs are the units (Welch's t-test across seeds); where a difference is not significant, how large
+a one the data rule out (two one-sided tests) and the seeds a side the test would need to find it
+8 times in 10 (`power.seeds_needed`, the observed
 spread taken as the truth). A run whose simulation diverged counts only where its windows are data
 (`sweeps.drop_diverged` blanks the rest). Imports `claims`, `power`, `significance`,
 `stats`, `sweeps` and `tables`.
@@ -20,7 +21,7 @@ import numpy as np
 
 from mjx_curio.analysis.claims import ALPHA, Tested
 from mjx_curio.analysis.power import MAX_SEEDS, seeds_needed
-from mjx_curio.analysis.significance import finite, welch_t
+from mjx_curio.analysis.significance import finite, tost_bound, welch_t
 from mjx_curio.analysis.stats import object_contacts, per_agent_vae_loss
 from mjx_curio.analysis.sweeps import Group, Sweep
 from mjx_curio.analysis.tables import Table
@@ -70,10 +71,12 @@ def walls_table(presets: Mapping[str, Sweep], late_steps: int = 5000) -> Table:
     (`WALLS_PAIRS`) also ran, over the walls-different sweep's steps (the identical-walls runs cut
     to the same length; a pair where they are shorter is left out): per measure
     (`walls_measures`), the mean with different walls, the mean with identical walls, and the
-    two-sided Welch p of their difference, and where p >= 0.05 the seeds a side that would find
+    two-sided Welch p of their difference, and where p >= 0.05 the difference the data rule out
+    (`significance.tost_bound`: two one-sided tests at 5 %) and the seeds a side that would find
     the observed difference with 80 % power (`power.seeds_needed`). `values`: per row the presets,
     group, steps compared, runs a side (those with a finite value), and per measure both means,
-    the difference, p and those seeds (NaN where significant or no difference was seen)."""
+    the difference, p, that bound and those seeds (NaN where significant or no difference was
+    seen)."""
     if not (isinstance(late_steps, (int, np.integer)) and late_steps > 0):
         raise ValueError(f"walls_table: late_steps={late_steps!r}; want a positive whole number of steps")
     columns = ["agents", "policy", "runs (different / same walls)"]
@@ -101,14 +104,17 @@ def walls_table(presets: Mapping[str, Sweep], late_steps: int = 5000) -> Table:
                 t = welch_t(md[key][g.indices], ms[key][h.indices])
                 a, b = _nanmean(md[key][g.indices]), _nanmean(ms[key][h.indices])
                 need = _seeds_for_power(md[key][g.indices], ms[key][h.indices], t)
+                bound = tost_bound(t["diff"], t["se"], t["df"], ALPHA) if t["p"] >= ALPHA else math.nan
                 p = f"p = {t['p']:.2g}" if math.isfinite(t["p"]) else "p n/a"
+                if math.isfinite(bound):
+                    p += f"; Δ within ±{bound:{fmt}}"
                 if math.isfinite(need):
                     p += f"; {int(need):,} seeds"
                 elif math.isinf(need):
                     p += f"; > {MAX_SEEDS:,} seeds"
                 row.append(f"{a:{fmt}} vs {b:{fmt}} ({p})")
                 vals.update({f"{key} different": a, f"{key} same": b, f"{key} diff": t["diff"], f"{key} p": t["p"],
-                             f"{key} seeds for 80 % power": need})
+                             f"{key} equivalence bound": bound, f"{key} seeds for 80 % power": need})
             rows.append(row)
             values.append(vals)
     if len(spans) == 1:
@@ -119,8 +125,9 @@ def walls_table(presets: Mapping[str, Sweep], late_steps: int = 5000) -> Table:
                    for c in columns]
     note = ("Walls different vs identical walls, the same agents and policy: means over runs (seeds), the "
             "identical-walls runs cut to the walls-different runs' length; p: Welch's two-sided t-test, runs as "
-            "units; where not significant, after p: the seeds a side that would find the difference seen 8 times in "
-            "10, its spread taken as the truth. Curiosity: the mean of the agents; VAE loss: per image (a two-agent loss "
+            "units; where not significant, after p: Δ within ±, the bound the data put on the difference (two one-sided "
+            "Welch tests at 5 %: the far end of its 90 % interval), and the seeds a side that would find the "
+            "difference seen 8 times in 10, its spread taken as the truth. Curiosity: the mean of the agents; VAE loss: per image (a two-agent loss "
             "halved), nats, of which the reconstruction term, the summed squared pixel error (the rest is the KL "
             "term).")
     return Table(columns, rows, values, note)
