@@ -2,6 +2,7 @@
 seeds it asks for against Cohen's tables, its power against simulations of the claims' own tests,
 and the table on synthetic sweeps with planted effects."""
 
+import dataclasses
 import math
 
 import numpy as np
@@ -120,10 +121,30 @@ def test_power_table_on_planted_sweeps():
     assert set(keys) == {"1", "2", "4", "6a", "6b", "7"}, keys
     assert all(len(row) == len(table.columns) for row in table.rows)
     row7 = table.rows[keys.index("7")]
-    assert row7[6] == "n/a (a claim of no difference)" and math.isfinite(table.values[keys.index("7")]["detectable_now"])
+    assert row7[7] == "n/a (a claim of no difference)" and math.isfinite(table.values[keys.index("7")]["detectable_now"])
+    # Its largest difference not ruled out is claim 7's equivalence bound.
+    assert table.values[keys.index("7")]["largest_allowed"] == pytest.approx(
+        cl.claim_temperatures_alike({"boltzmann_temperatures": temps}).values["equivalence_bound"])
     # 8 seeds detect smaller effects than 3 (where the runs differ at all).
     for v in table.values:
         if v["detectable_now"]:
             assert v["detectable_planned"] < v["detectable_now"], v
     # No contacts in any run: no effect and no spread.
-    assert "| objects UCB > ε | 0 | 0, 0 | 3 | none: no effect observed | 0 | 0 |" in table.to_markdown()
+    assert "| objects UCB > ε | 0 | 0, 0 | 0 | 3 | none: no effect observed | 0 | 0 |" in table.to_markdown()
+
+
+def test_largest_allowed_is_the_one_sided_upper_confidence_bound():
+    # One sample 1, 2, 3, 4 against 0: mean 2.5, se sqrt(5/3) / 2, t(0.95, 3) = 2.353363 (tables).
+    one = cl.Tested(np.array([1.0, 2.0, 3.0, 4.0, np.nan]))
+    assert pw.largest_allowed(one) == pytest.approx(2.5 + 2.353363 * math.sqrt(5 / 3) / 2, abs=1e-5)
+    # Against a null of 3 the effect is negative, and so is the bound: the paper's direction is ruled out.
+    assert pw.largest_allowed(dataclasses.replace(one, null=5.0)) == pytest.approx(
+        pw.largest_allowed(one) - 5.0)
+    # Two samples: Welch's difference 3, se sqrt(2), df 2, t(0.95, 2) = 2.919986.
+    two = cl.Tested(np.array([-1.0, 1.0]) + 3.0, np.array([-1.0, 1.0]))
+    assert pw.largest_allowed(two) == pytest.approx(3 + 2.919986 * math.sqrt(2), abs=1e-5)
+    assert math.isnan(pw.largest_allowed(cl.Tested(np.array([1.0]))))
+    # It covers: over many draws of 5 runs with a true effect of 1, the bound falls below 1 in 5 %.
+    rng, reps = np.random.default_rng(3), 4000
+    below = np.mean([pw.largest_allowed(cl.Tested(rng.normal(1.0, 2.0, 5))) < 1.0 for _ in range(reps)])
+    assert below == pytest.approx(0.05, abs=4 * math.sqrt(0.05 * 0.95 / reps)), below

@@ -86,8 +86,9 @@ action_values, curiosity_parts, self_model and temperatures):
     temperatures  what a Boltzmann sweep's temperatures change, run by run: `temperature_table`
               and the `temperature_measures` behind it; `policy_measures_table`, the same per
               policy
-    power     how many seeds each claim's tests need and the smallest effect they detect:
-              `power_table`, and `seeds_needed`, `detectable`, `t_power`, `noncentral_t_sf` behind it
+    power     how many seeds each claim's tests need, the smallest effect they detect and the
+              largest the runs do not rule out: `power_table`, and `seeds_needed`, `detectable`,
+              `largest_allowed`, `t_power`, `noncentral_t_sf` behind it
     curiosity_parts  claim 1's fall and rise split into the world model's error against the posterior
               mean and the posterior's spread, from sweeps that record the spread:
               `curiosity_parts_table`, `parts_fall_rise`, `curiosity_parts`, `records_spread`,
@@ -244,7 +245,7 @@ from mjx_curio.analysis.sweeps import (
     side_experiment,
 )
 from mjx_curio.analysis.tables import Table, headline_table
-from mjx_curio.analysis.power import detectable, noncentral_t_sf, power_table, seeds_needed, t_power
+from mjx_curio.analysis.power import detectable, largest_allowed, noncentral_t_sf, power_table, seeds_needed, t_power
 from mjx_curio.analysis.temperatures import policy_measures_table, temperature_measures, temperature_table
 from mjx_curio.analysis.walls import WALLS_PAIRS, walls_measures, walls_table
 
@@ -272,7 +273,7 @@ __all__ = [
     # walls
     "WALLS_PAIRS", "walls_measures", "walls_table",
     # power
-    "detectable", "noncentral_t_sf", "power_table", "seeds_needed", "t_power",
+    "detectable", "largest_allowed", "noncentral_t_sf", "power_table", "seeds_needed", "t_power",
     # self_model
     "STEP_METRICS", "records_steps", "step_tracking", "tracking_over_time",
     # significance

@@ -9,7 +9,9 @@ the paper's effect is positive); from their spread across runs this module gives
                          direction), would find the effect observed here with probability 0.8,
                          were that effect and that spread the truth;
   detectable effect      the smallest true effect the test finds with probability 0.8, at the
-                         seeds the sweeps ran and at `PLANNED_SEEDS` (the main job's seeds=8).
+                         seeds the sweeps ran and at `PLANNED_SEEDS` (the main job's seeds=8);
+  largest not ruled out  the one-sided 95 % upper confidence bound of the effect: what the runs
+                         themselves allow, the complement of a test that found nothing.
 
 A claim that needs every one of its tests to pass needs the most seeds any of them needs. The
 spread comes from the runs themselves: with 3 seeds a standard deviation is uncertain by a factor
@@ -26,7 +28,7 @@ import math
 import numpy as np
 
 from mjx_curio.analysis.claims import ALPHA, Tested, _num, claim_results
-from mjx_curio.analysis.significance import block_anova, finite, t_critical
+from mjx_curio.analysis.significance import block_anova, equivalence_bound, finite, t_critical, welch_t
 from mjx_curio.analysis.tables import Table
 
 POWER = 0.8
@@ -143,13 +145,38 @@ def detectable(tested: Tested, seeds: float, target: float = POWER) -> float:
     return se * (lo + hi) / 2.0
 
 
+def largest_allowed(tested: Tested, alpha: float = ALPHA) -> float:
+    """The largest effect in the paper's direction that the runs do not rule out: the one-sided
+    (1 - `alpha`) upper confidence bound of the effect, effect + t(1 - alpha, df) x its standard
+    error (one sample: sd / sqrt(n) on n - 1 degrees of freedom; two: Welch's). Below 0 the
+    paper's direction itself is ruled out. For a blocked claim of no difference, the
+    `significance.equivalence_bound`: the largest difference between two treatments not ruled
+    out. Where a test finds nothing, this says how much it could have missed, from the data
+    alone; `detectable` says it from the spread, before looking at the effect."""
+    if tested.blocked:
+        return equivalence_bound(tested.x, alpha)["bound"]
+    x = finite(tested.x)
+    if tested.y is None:
+        if len(x) < 2:
+            return math.nan
+        se, df = float(x.std(ddof=1)) / math.sqrt(len(x)), len(x) - 1
+    else:
+        w = welch_t(x, tested.y)
+        if w["nx"] >= 2 and w["ny"] >= 2 and not math.isfinite(w["se"]):
+            return effect(tested)  # no spread on either side: the effect is known exactly
+        se, df = w["se"], w["df"]
+    if not (math.isfinite(se) and math.isfinite(df)):
+        return math.nan
+    return effect(tested) + t_critical(df, 2.0 * alpha) * se
+
+
 def power_table(sweeps) -> Table:
     """One row per test a claim's verdict rests on: the observed effect (the paper's direction
-    positive) and the spread across runs, the seeds the sweeps ran, the seeds for 80 % power at the
-    observed effect, and the smallest effect detectable with 80 % power now and at
-    `PLANNED_SEEDS`."""
-    cols = ["#", "verdict", "test", "observed effect", "sd across runs", "seeds", "seeds for 80 % power",
-            "detectable now", f"detectable at {PLANNED_SEEDS} seeds"]
+    positive) and the spread across runs, the largest effect the runs do not rule out
+    (`largest_allowed`), the seeds the sweeps ran, the seeds for 80 % power at the observed
+    effect, and the smallest effect detectable with 80 % power now and at `PLANNED_SEEDS`."""
+    cols = ["#", "verdict", "test", "observed effect", "sd across runs", "largest not ruled out (95 %)", "seeds",
+            "seeds for 80 % power", "detectable now", f"detectable at {PLANNED_SEEDS} seeds"]
     rows, values = [], []
     for r in claim_results(sweeps):
         for label, t in r.tests.items():
@@ -158,14 +185,19 @@ def power_table(sweeps) -> Table:
                 continue
             mde_now, mde_planned = detectable(t, now), detectable(t, PLANNED_SEEDS)
             sd = _spread(t)
-            rows.append([r.key, r.verdict.split(":")[0].split(" (")[0], label, _g(d), sd, str(now), _seeds(t, d, need),
-                         _g(mde_now), _g(mde_planned)])
-            values.append({"key": r.key, "test": label, "effect": _num(d), "seeds": now, "seeds_needed": _num(need),
-                           "detectable_now": _num(mde_now), "detectable_planned": _num(mde_planned)})
+            bound = largest_allowed(t)
+            rows.append([r.key, r.verdict.split(":")[0].split(" (")[0], label, _g(d), sd, _g(bound), str(now),
+                         _seeds(t, d, need), _g(mde_now), _g(mde_planned)])
+            values.append({"key": r.key, "test": label, "effect": _num(d), "largest_allowed": _num(bound), "seeds": now,
+                           "seeds_needed": _num(need), "detectable_now": _num(mde_now),
+                           "detectable_planned": _num(mde_planned)})
     note = ("Seeds are per group (a policy or setting; the tests that pool every policy of a sweep count a "
             "seed once, its runs of every policy together). Observed effect: in the paper's direction (negative: "
             "the other way); claim 7's is the largest difference between two temperatures, and its detectable "
-            "effect a difference between two temperatures in the blocked design. Power: the chance that the "
+            "effect a difference between two temperatures in the blocked design. Largest not ruled out: the "
+            "one-sided 95 % upper confidence bound of the effect (below 0: the paper's direction is ruled out; "
+            "claim 7: the equivalence bound, the largest difference between two temperatures two one-sided tests "
+            "at 5 % do not rule out). Power: the chance that the "
             "claim's own test (95 % interval above the null, or Welch's t, p < 0.05, in the paper's direction) "
             "finds an effect, the spread across runs taken as the truth; with 3 seeds that spread is itself "
             "uncertain by a factor of about 0.5 to 6.")
