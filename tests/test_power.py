@@ -121,7 +121,12 @@ def test_power_table_on_planted_sweeps():
     assert set(keys) == {"1", "2", "4", "6a", "6b", "7"}, keys
     assert all(len(row) == len(table.columns) for row in table.rows)
     row7 = table.rows[keys.index("7")]
-    assert row7[7] == "n/a (a claim of no difference)" and math.isfinite(table.values[keys.index("7")]["detectable_now"])
+    assert row7[8] == "n/a (a claim of no difference)"
+    assert math.isfinite(table.values[keys.index("7")]["detectable_now"])
+    # Holm's adjustment runs over every test of the table but claim 7's.
+    ps = [math.nan if v["p"] is None else v["p"] for v in table.values]
+    assert table.values[keys.index("7")]["p"] is None and row7[6] == "n/a"
+    np.testing.assert_allclose([math.nan if v["p_holm"] is None else v["p_holm"] for v in table.values], an.holm(ps))
     # Its largest difference not ruled out is claim 7's equivalence bound.
     assert table.values[keys.index("7")]["largest_allowed"] == pytest.approx(
         cl.claim_temperatures_alike({"boltzmann_temperatures": temps}).values["equivalence_bound"])
@@ -130,7 +135,7 @@ def test_power_table_on_planted_sweeps():
         if v["detectable_now"]:
             assert v["detectable_planned"] < v["detectable_now"], v
     # No contacts in any run: no effect and no spread.
-    assert "| objects UCB > ε | 0 | 0, 0 | 0 | 3 | none: no effect observed | 0 | 0 |" in table.to_markdown()
+    assert "| objects UCB > ε | 0 | 0, 0 | 0 | n/a | 3 | none: no effect observed | 0 | 0 |" in table.to_markdown()
 
 
 def test_largest_allowed_is_the_one_sided_upper_confidence_bound():
@@ -144,6 +149,12 @@ def test_largest_allowed_is_the_one_sided_upper_confidence_bound():
     two = cl.Tested(np.array([-1.0, 1.0]) + 3.0, np.array([-1.0, 1.0]))
     assert pw.largest_allowed(two) == pytest.approx(3 + 2.919986 * math.sqrt(2), abs=1e-5)
     assert math.isnan(pw.largest_allowed(cl.Tested(np.array([1.0]))))
+    # The tests' own p: Student's t of 1, 2, 3 against 0 is 2 sqrt(3) on 2 degrees of freedom,
+    # whose two-sided tail is 1 - t / sqrt(2 + t^2); Welch's for two samples; none for a blocked table.
+    t = 2 * math.sqrt(3)
+    assert pw.p_value(cl.Tested(np.array([1.0, 2.0, 3.0]))) == pytest.approx(1 - t / math.sqrt(2 + t * t))
+    assert pw.p_value(two) == pytest.approx(an.welch_t(two.x, two.y)["p"])
+    assert math.isnan(pw.p_value(cl.Tested(np.ones((3, 3)), blocked=True)))
     # It covers: over many draws of 5 runs with a true effect of 1, the bound falls below 1 in 5 %.
     rng, reps = np.random.default_rng(3), 4000
     below = np.mean([pw.largest_allowed(cl.Tested(rng.normal(1.0, 2.0, 5))) < 1.0 for _ in range(reps)])

@@ -449,7 +449,7 @@ def test_page_blocks_on_the_tiny_sweeps(results, tiny_sweeps_dir, tmp_path):
             assert a == b, row
     # Power from the tests with two seeds' values: the two-agent sweep's groups.
     rows = [r.split(" | ") for r in results.power_block(presets).splitlines()[2:] if r.startswith("| ")]
-    assert rows and all(r[6] == "2" for r in rows), rows
+    assert rows and all(r[7] == "2" for r in rows), rows
 
 
 def test_bad_command_lines_are_messages_not_tracebacks(results, tmp_path, capsys):

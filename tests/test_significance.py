@@ -134,6 +134,20 @@ def test_tost_bound_is_the_far_end_of_the_90_percent_interval():
     assert math.isnan(sig.tost_bound(math.nan, 1.0, 5)) and math.isnan(sig.tost_bound(1.0, math.nan, 5))
 
 
+def test_holm_by_hand():
+    # Four finite p-values, sorted 0.005, 0.01, 0.03, 0.04: times 4, 3, 2, 1 gives 0.02, 0.03, 0.06,
+    # 0.04, and the running maximum keeps the order: 0.02, 0.03, 0.06, 0.06. A NaN is no test.
+    q = sig.holm([0.01, 0.04, 0.03, np.nan, 0.005])
+    np.testing.assert_allclose(q, [0.03, 0.06, 0.06, np.nan, 0.02])
+    assert sig.holm([0.5, 0.9])[1] == 1.0 and sig.holm([]).shape == (0,)
+    try:  # an independent implementation where one is installed (neither is a dependency)
+        from statsmodels.stats.multitest import multipletests
+    except ImportError:
+        return
+    p = np.random.default_rng(0).uniform(0, 0.1, 12)
+    np.testing.assert_allclose(sig.holm(p), multipletests(p, method="holm")[1])
+
+
 @pytest.mark.parametrize("means,level", [((0.0, 1.0), "at"), ((0.0, 0.5, 1.0, 1.0), "below")])
 def test_equivalence_bound_keeps_its_level(means, level):
     # Simulated block designs (6 seeds, unit noise, seeds with levels of their own) whose two most

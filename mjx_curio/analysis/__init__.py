@@ -76,7 +76,7 @@ action_values, curiosity_parts, self_model and temperatures):
               `posterior_dims`, that variance dimension by dimension
     tables    the headline table: `headline_table` and its `Table` (Markdown, CSV)
     significance  the tests, in NumPy alone: `welch_t`, `one_way_anova`, `block_anova`,
-              `equivalence_bound` and `tost_bound` (two one-sided tests), `pearson_r`, `fisher_z`,
+              `equivalence_bound` and `tost_bound` (two one-sided tests), `holm`, `pearson_r`, `fisher_z`,
               and the t and F tails behind them (`t_pvalue`, `f_pvalue`, `t_critical`, `betainc`)
     self_model  does the self-model track the curiosity obtained step by step (claim 8): the
               window moments sweeps record, pooled within windows (`step_tracking`,
@@ -88,7 +88,7 @@ action_values, curiosity_parts, self_model and temperatures):
               policy
     power     how many seeds each claim's tests need, the smallest effect they detect and the
               largest the runs do not rule out: `power_table`, and `seeds_needed`, `detectable`,
-              `largest_allowed`, `t_power`, `noncentral_t_sf` behind it
+              `largest_allowed`, `p_value`, `t_power`, `noncentral_t_sf` behind it
     curiosity_parts  claim 1's fall and rise split into the world model's error against the posterior
               mean and the posterior's spread, from sweeps that record the spread:
               `curiosity_parts_table`, `parts_fall_rise`, `curiosity_parts`, `records_spread`,
@@ -157,6 +157,7 @@ from mjx_curio.analysis.significance import (
     equivalence_bound,
     f_pvalue,
     fisher_z,
+    holm,
     one_way_anova,
     pearson_r,
     t_critical,
@@ -245,7 +246,15 @@ from mjx_curio.analysis.sweeps import (
     side_experiment,
 )
 from mjx_curio.analysis.tables import Table, headline_table
-from mjx_curio.analysis.power import detectable, largest_allowed, noncentral_t_sf, power_table, seeds_needed, t_power
+from mjx_curio.analysis.power import (
+    detectable,
+    largest_allowed,
+    noncentral_t_sf,
+    p_value,
+    power_table,
+    seeds_needed,
+    t_power,
+)
 from mjx_curio.analysis.temperatures import policy_measures_table, temperature_measures, temperature_table
 from mjx_curio.analysis.walls import WALLS_PAIRS, walls_measures, walls_table
 
@@ -273,11 +282,11 @@ __all__ = [
     # walls
     "WALLS_PAIRS", "walls_measures", "walls_table",
     # power
-    "detectable", "largest_allowed", "noncentral_t_sf", "power_table", "seeds_needed", "t_power",
+    "detectable", "largest_allowed", "noncentral_t_sf", "p_value", "power_table", "seeds_needed", "t_power",
     # self_model
     "STEP_METRICS", "records_steps", "step_tracking", "tracking_over_time",
     # significance
-    "betainc", "block_anova", "equivalence_bound", "f_pvalue", "fisher_z", "one_way_anova", "pearson_r",
+    "betainc", "block_anova", "equivalence_bound", "f_pvalue", "fisher_z", "holm", "one_way_anova", "pearson_r",
     "t_critical", "t_pvalue", "tost_bound", "welch_t",
     # claims
     "CLAIMS", "ClaimResult", "Tested", "VERDICTS", "action_shares", "agent_curiosity_coupling", "assign_presets",

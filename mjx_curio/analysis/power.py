@@ -28,7 +28,15 @@ import math
 import numpy as np
 
 from mjx_curio.analysis.claims import ALPHA, Tested, _num, claim_results
-from mjx_curio.analysis.significance import block_anova, equivalence_bound, finite, t_critical, welch_t
+from mjx_curio.analysis.significance import (
+    block_anova,
+    equivalence_bound,
+    finite,
+    holm,
+    t_critical,
+    t_pvalue,
+    welch_t,
+)
 from mjx_curio.analysis.tables import Table
 
 POWER = 0.8
@@ -170,13 +178,31 @@ def largest_allowed(tested: Tested, alpha: float = ALPHA) -> float:
     return effect(tested) + t_critical(df, 2.0 * alpha) * se
 
 
+def p_value(tested: Tested) -> float:
+    """The two-sided p-value of `tested`'s own test: one sample, Student's t of mean(x) - null;
+    two, Welch's t. NaN for a blocked claim of no difference, whose verdict a small p would turn
+    against the paper, so that a correction for many tests would favour it."""
+    if tested.blocked:
+        return math.nan
+    if tested.y is not None:
+        return welch_t(tested.x, tested.y)["p"]
+    x = finite(tested.x)
+    if len(x) < 2:
+        return math.nan
+    sd = float(x.std(ddof=1))
+    if sd == 0:
+        return 0.0 if x.mean() != tested.null else math.nan
+    return t_pvalue((x.mean() - tested.null) / (sd / math.sqrt(len(x))), len(x) - 1)
+
+
 def power_table(sweeps) -> Table:
     """One row per test a claim's verdict rests on: the observed effect (the paper's direction
     positive) and the spread across runs, the largest effect the runs do not rule out
     (`largest_allowed`), the seeds the sweeps ran, the seeds for 80 % power at the observed
-    effect, and the smallest effect detectable with 80 % power now and at `PLANNED_SEEDS`."""
-    cols = ["#", "verdict", "test", "observed effect", "sd across runs", "largest not ruled out (95 %)", "seeds",
-            "seeds for 80 % power", "detectable now", f"detectable at {PLANNED_SEEDS} seeds"]
+    effect, and the smallest effect detectable with 80 % power now and at `PLANNED_SEEDS`; and each
+    test's two-sided p (`p_value`) with Holm's adjustment over every test of the table (`holm`)."""
+    cols = ["#", "verdict", "test", "observed effect", "sd across runs", "largest not ruled out (95 %)",
+            "p (Holm)", "seeds", "seeds for 80 % power", "detectable now", f"detectable at {PLANNED_SEEDS} seeds"]
     rows, values = [], []
     for r in claim_results(sweeps):
         for label, t in r.tests.items():
@@ -186,18 +212,24 @@ def power_table(sweeps) -> Table:
             mde_now, mde_planned = detectable(t, now), detectable(t, PLANNED_SEEDS)
             sd = _spread(t)
             bound = largest_allowed(t)
-            rows.append([r.key, r.verdict.split(":")[0].split(" (")[0], label, _g(d), sd, _g(bound), str(now),
+            rows.append([r.key, r.verdict.split(":")[0].split(" (")[0], label, _g(d), sd, _g(bound), "", str(now),
                          _seeds(t, d, need), _g(mde_now), _g(mde_planned)])
-            values.append({"key": r.key, "test": label, "effect": _num(d), "largest_allowed": _num(bound), "seeds": now,
-                           "seeds_needed": _num(need), "detectable_now": _num(mde_now),
-                           "detectable_planned": _num(mde_planned)})
+            values.append({"key": r.key, "test": label, "effect": _num(d), "largest_allowed": _num(bound),
+                           "p": _num(p_value(t)), "seeds": now, "seeds_needed": _num(need),
+                           "detectable_now": _num(mde_now), "detectable_planned": _num(mde_planned)})
+    adjusted = holm([math.nan if v["p"] is None else v["p"] for v in values])
+    for row, v, q in zip(rows, values, adjusted):
+        v["p_holm"] = _num(q)
+        row[6] = "n/a" if v["p"] is None else f"{_pv(v['p'])} ({_pv(q)})"
     note = ("Seeds are per group (a policy or setting; the tests that pool every policy of a sweep count a "
             "seed once, its runs of every policy together). Observed effect: in the paper's direction (negative: "
             "the other way); claim 7's is the largest difference between two temperatures, and its detectable "
             "effect a difference between two temperatures in the blocked design. Largest not ruled out: the "
             "one-sided 95 % upper confidence bound of the effect (below 0: the paper's direction is ruled out; "
             "claim 7: the equivalence bound, the largest difference between two temperatures two one-sided tests "
-            "at 5 % do not rule out). Power: the chance that the "
+            "at 5 % do not rule out). p (Holm): the test's two-sided p, and in brackets adjusted by Holm's method "
+            "over every test of the table (claim 7's excepted: a correction would favour its claim of no "
+            "difference). Power: the chance that the "
             "claim's own test (95 % interval above the null, or Welch's t, p < 0.05, in the paper's direction) "
             "finds an effect, the spread across runs taken as the truth; with 3 seeds that spread is itself "
             "uncertain by a factor of about 0.5 to 6.")
@@ -235,6 +267,10 @@ def _seeds(t: Tested, d: float, need: float) -> str:
     if d == 0:
         return "none: no effect observed"
     return f"> {MAX_SEEDS:,}" if math.isinf(need) else f"{int(need):,}"
+
+
+def _pv(p: float) -> str:
+    return "< 0.0001" if p < 1e-4 else f"{p:.2g}"
 
 
 def _g(x: float) -> str:

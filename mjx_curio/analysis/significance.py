@@ -1,6 +1,6 @@
 """Significance tests in NumPy and the standard library: Student t and F tails and the t a test must
-exceed, Welch's t, one-way and block ANOVA, equivalence bounds (two one-sided tests), Pearson's r
-and Fisher's z.
+exceed, Welch's t, one-way and block ANOVA, equivalence bounds (two one-sided tests), Holm's
+adjustment for many tests, Pearson's r and Fisher's z.
 
 The tails come from the regularised incomplete beta function (`betainc`, a continued fraction),
 so the analysis needs no SciPy; the tests check them against closed forms and hand computations.
@@ -196,6 +196,20 @@ def equivalence_bound(table, alpha: float = 0.05) -> dict:
     out["largest"] = float(means.max() - means.min())
     out["se"] = math.sqrt(2.0 * a["ms_error"] / a["b"])
     out["bound"] = tost_bound(out["largest"], out["se"], a["df2"], alpha)  # every pair's se is the same
+    return out
+
+
+def holm(pvalues) -> np.ndarray:
+    """Holm's step-down adjustment of a family of p-values: the i-th smallest becomes the largest
+    of (m - j + 1) p_(j) over j <= i, capped at 1, for the m finite ones (NaNs stay NaN and do
+    not count). A test whose adjusted p is below alpha is significant with the chance of any false
+    finding in the whole family held at alpha, whatever the tests' dependence."""
+    p = np.asarray(pvalues, float)
+    out = np.full(p.shape, np.nan)
+    idx = np.flatnonzero(np.isfinite(p))
+    order = idx[np.argsort(p[idx], kind="stable")]
+    m = len(order)
+    out[order] = np.minimum(np.maximum.accumulate((m - np.arange(m)) * p[order]), 1.0)
     return out
 
 
