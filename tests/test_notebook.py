@@ -116,6 +116,11 @@ def test_notebook_runs(tiny_sweeps_dir, tmp_path):
     for s in slugs:
         assert (figures / f"{s}-headline.md").read_text().count("|") > 20
         assert (figures / f"{s}-headline.csv").is_file()
+    # The claims table has a row a claim, the power table its columns; both are saved as CSV too.
+    claims = (figures / "claims.md").read_text()
+    assert all(f"\n| {k} | " in claims for k in ("1", "2", "3", "4", "5", "6a", "6b", "7", "8", "9")), claims
+    assert "largest not ruled out (95 %) | p (Holm)" in (figures / "power.md").read_text()
+    assert (figures / "claims.csv").is_file() and (figures / "power.csv").is_file()
     errors = [o for c in nb.cells if c.cell_type == "code" for o in c.outputs if o.output_type == "error"]
     assert not errors
     for name, p in sweeps.items():
