@@ -606,8 +606,13 @@ def _figures() -> tuple[Figure, ...]:
         Figure("multi_agent_policies", ("multi_agent",),
                "The three policies' curiosity on one axis, two agents (their mean). x: agent steps; y: curiosity "
                "reward (squared latent distance, unitless), moving average over 1,000 steps, mean over {seeds} seeds "
-               "with 95 % confidence bands. Paper: fig. 11 (single agent, one run each).",
+               "with 95 % confidence bands. Paper: fig. 11 is the single agent's (next figure).",
                _one(lambda p, ax: an.plot_curiosity_groups(p["multi_agent"], ax))),
+        Figure("single_agent_policies", ("single_agent",),
+               "The three policies' curiosity on one axis, one agent, as claims 10 and 11 compare them. x: agent "
+               "steps; y: curiosity reward (squared latent distance, unitless), moving average over 1,000 steps, mean "
+               "over {seeds} seeds with 95 % confidence bands. Paper: fig. 11 (one run each).",
+               _one(lambda p, ax: an.plot_curiosity_groups(p["single_agent"], ax))),
         Figure("multi_agent_interactions", ("multi_agent",),
                "Cumulative contacts per policy, two agents. Left: agent-object contact steps (both agents, all four "
                "objects); right: steps with the two agents touching. x: agent steps; y: the running total as a "

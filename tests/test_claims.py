@@ -168,7 +168,7 @@ def test_pieces_of_one_grid_merge_over_the_keys_they_may_differ_in():
 
 def test_missing_presets_make_every_row_not_testable_with_the_name():
     table = cl.claims_table({})
-    assert [v["key"] for v in table.values] == ["1", "2", "3", "4", "5", "6a", "6b", "7", "8", "9"]
+    assert [v["key"] for v in table.values] == ["1", "2", "3", "4", "5", "6a", "6b", "7", "8", "9", "10", "11"]
     for v in table.values:
         assert v["verdict"].startswith("not testable: the ") and "missing" in v["verdict"]
     assert "boltzmann_temperatures sweep is missing" in table.values[7]["verdict"]
@@ -774,16 +774,66 @@ def test_prefers_moving_objects_share():
     assert r.verdict.startswith("holds"), r.verdict
 
 
+def _plant_run_curiosity(s, levels):
+    """Each run's curiosity: 0 over the first half of the windows, twice its level over the second
+    (so only the mean over the whole run is the level), the agents alike."""
+    half = s.n_windows // 2
+    s.metrics["curiosity"][:] = 0.0
+    s.metrics["curiosity"][:, half:, :] = 2 * np.asarray(levels, float)[:, None, None]
+
+
+def test_policy_curiosity_claims_on_planted_runs():
+    single = fake_sweep("single_agent", 1, POLICIES, 2000, seeds=3)  # 40,000 steps
+    multi = fake_sweep("multi_agent", 2, POLICIES, 2000, seeds=3)
+    # Claim 10, one agent: Boltzmann 0.4 below both others (sd 0.1, p ~ 0.008), ε-greedy 0.05 below UCB.
+    _plant_run_curiosity(single, [0.5, 0.6, 0.7, 0.1, 0.2, 0.3, 0.55, 0.65, 0.75])
+    r = cl.claim_boltzmann_least_curious({"single_agent": single})
+    assert r.verdict.startswith("holds"), r.verdict
+    v = r.values
+    assert (v["single_agent eps"], v["single_agent boltzmann"], v["single_agent ucb"]) == (
+        pytest.approx(0.6), pytest.approx(0.2), pytest.approx(0.65))
+    assert v["single_agent ε-greedy > Boltzmann p"] == pytest.approx(
+        an.welch_t([0.5, 0.6, 0.7], [0.1, 0.2, 0.3])["p"]) and v["single_agent ε-greedy > Boltzmann p"] < 0.05
+    w = an.welch_t([0.5, 0.6, 0.7], [0.55, 0.65, 0.75])
+    assert v["single_agent eps - ucb"] == pytest.approx(-0.05)
+    assert v["single_agent eps - ucb bound"] == pytest.approx(an.tost_bound(-0.05, w["se"], w["df"]))
+    assert set(r.tests) == {"ε-greedy > Boltzmann", "UCB > Boltzmann"} and "Context" not in r.statistic
+    # Boltzmann the most curious: significantly the other way, both tests named.
+    _plant_run_curiosity(single, [0.5, 0.6, 0.7, 0.9, 1.0, 1.1, 0.55, 0.65, 0.75])
+    r = cl.claim_boltzmann_least_curious({"single_agent": single, "multi_agent": multi})
+    assert r.verdict == ("does not hold: ε-greedy > Boltzmann significantly the other way; UCB > Boltzmann "
+                         "significantly the other way"), r.verdict
+    assert "Context, not the verdict: multi_agent (2 agents)" in r.statistic and r.values["multi_agent eps"] == 0.0
+    # Claim 11, two agents: UCB 0.4 above ε-greedy holds; the same level does not.
+    _plant_run_curiosity(multi, [0.5, 0.6, 0.7, 0.0, 0.0, 0.0, 0.9, 1.0, 1.1])
+    r = cl.claim_ucb_more_curious({"multi_agent": multi, "single_agent": single})
+    assert r.verdict.startswith("holds") and "(1 agent)" in r.statistic, (r.verdict, r.statistic)
+    assert r.values["multi_agent UCB > ε-greedy p"] == pytest.approx(an.welch_t([0.9, 1.0, 1.1], [0.5, 0.6, 0.7])["p"])
+    _plant_run_curiosity(multi, [0.5, 0.6, 0.7, 0.0, 0.0, 0.0, 0.5, 0.6, 0.7])
+    assert cl.claim_ucb_more_curious({"multi_agent": multi}).verdict == "does not hold: UCB > ε-greedy not significant"
+    # What cannot be tested says why: no sweep, no Boltzmann runs, runs too short.
+    assert "single_agent sweep is missing" in cl.claim_boltzmann_least_curious({}).verdict
+    two = fake_sweep("single_agent", 1, [("eps", 0.2), ("ucb", 1.0)], 2000)
+    assert cl.claim_boltzmann_least_curious({"single_agent": two}).verdict == (
+        "not testable: single_agent has no runs of boltzmann")
+    short = fake_sweep("multi_agent", 2, POLICIES, 100)
+    assert cl.claim_ucb_more_curious({"multi_agent": short}).verdict.startswith(
+        "not testable at this scale (needs runs of >= 40,000 steps (multi_agent has 2,000)")
+
+
 # ------------------------------------------------------------------------------ the tiny sweeps
 
 
 def test_claims_table_on_the_tiny_sweeps(tiny_sweeps_dir):
     table = an.claims_table(tiny_sweeps_dir)
     md = table.to_markdown()
-    assert [v["key"] for v in table.values] == ["1", "2", "3", "4", "5", "6a", "6b", "7", "8", "9"]
+    assert [v["key"] for v in table.values] == ["1", "2", "3", "4", "5", "6a", "6b", "7", "8", "9", "10", "11"]
     assert len(table.rows) == len(cl.CLAIMS) and all(len(r) == len(table.columns) for r in table.rows)
     for v in table.values:
         assert v["verdict"].startswith(cl.VERDICTS), v["verdict"]
+        if v["key"] == "10":  # the tiny one-agent sweep runs ε-greedy and UCB only
+            assert v["verdict"] == "not testable: single has no runs of boltzmann", v["verdict"]
+            continue
         # 200 steps and 1-2 seeds: too small for any claim, and the table must say so.
         assert v["verdict"].startswith("not testable at this scale (needs runs of >= "), v["verdict"]
         assert "multi has 200)" in v["verdict"] or "single has 200)" in v["verdict"], v["verdict"]

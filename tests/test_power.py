@@ -118,7 +118,7 @@ def test_power_table_on_planted_sweeps():
     keys = [v["key"] for v in table.values]
     # The claims these two sweeps test; 8 and 9 have nothing to compare here (no predictions, nothing
     # in view), and a test without two seeds' values gets no row.
-    assert set(keys) == {"1", "2", "4", "6a", "6b", "7"}, keys
+    assert set(keys) == {"1", "2", "4", "6a", "6b", "7", "11"}, keys
     assert all(len(row) == len(table.columns) for row in table.rows)
     row7 = table.rows[keys.index("7")]
     assert row7[8] == "n/a (a claim of no difference)"

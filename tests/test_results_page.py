@@ -404,7 +404,7 @@ def test_page_blocks_on_the_tiny_sweeps(results, tiny_sweeps_dir, tmp_path):
     figures = results.figures_block(presets, out=tmp_path / "fig")
     drawn = sorted(p.stem for p in (tmp_path / "fig").glob("*.png"))
     assert drawn == sorted(f.name for f in results._figures() if set(f.needs) <= set(presets))
-    assert len(drawn) == 9 and figures.count("![") == 9
+    assert len(drawn) == 10 and figures.count("![") == 10
     # The temperature and wall figures too, the tiny sweeps of matching agent count standing in.
     assert results.temperatures_block(presets).startswith("No Boltzmann temperature sweep")
     assert results.walls_block(presets).startswith("No walls-different sweep")
@@ -416,7 +416,7 @@ def test_page_blocks_on_the_tiny_sweeps(results, tiny_sweeps_dir, tmp_path):
     presets["multi_agent.spread"] = presets["multi_agent.spread_ucb"] = presets["multi_agent"]
     presets["multi_agent.z_mean"] = presets["multi_agent"]
     results.figures_block(presets, out=tmp_path / "all")
-    assert len(list((tmp_path / "all").glob("*.png"))) == len(results._figures()) == 24
+    assert len(list((tmp_path / "all").glob("*.png"))) == len(results._figures()) == 25
     # The tiny sweeps record the spread: claim 1's three parts per group of each preset they stand
     # for; 200 steps fill the early block (steps 0-2k) alone.
     block = results.curiosity_parts_block(presets, dims=tmp_path / "no_posterior_dims.json")

@@ -59,7 +59,15 @@ from mjx_curio.analysis.stats import (
     per_agent_vae_loss,
     turn_reversals,
 )
-from mjx_curio.analysis.significance import block_anova, equivalence_bound, fisher_z, one_way_anova, pearson_r, welch_t
+from mjx_curio.analysis.significance import (
+    block_anova,
+    equivalence_bound,
+    fisher_z,
+    one_way_anova,
+    pearson_r,
+    tost_bound,
+    welch_t,
+)
 from mjx_curio.analysis.self_model import records_steps, step_tracking, trailing_sum
 from mjx_curio.analysis.sweeps import Group, Sweep, SweepError, load_sweeps, merge_sweeps, side_experiment
 from mjx_curio.analysis.tables import Table
@@ -907,10 +915,105 @@ def watching_excess(sweep: Sweep, window: int = SMOOTH, moved_m: float = 0.01) -
     return {"watching": w, "quiet": q, "diff": w - q, "n_watching": int(watching.sum()), "n_quiet": int(quiet.sum())}
 
 
+def claim_boltzmann_least_curious(presets: Mapping[str, Sweep]) -> ClaimResult:
+    """Claim 10: Boltzmann records the lowest curiosity of the three policies, throughout the run;
+    ε-greedy and UCB follow similar curves (fig. 11, section 4.1).
+
+    Measured on single_agent (the paper's section 4.1, one agent), per run: the mean curiosity
+    over the whole run (`run_curiosity`). Two Welch t-tests across runs: ε-greedy > Boltzmann and
+    UCB > Boltzmann. Verdict: holds if both have p < 0.05 in the paper's direction. Context, not
+    the verdict: ε-greedy against UCB (Welch, with the bound two one-sided tests put on their
+    difference: the paper's "very similar"), and the same three policies with two agents
+    (multi_agent), where loaded. Scale: runs of >= 40,000 steps (the paper's "throughout" is an
+    80,000-step run), >= MIN_SEEDS seeds a policy.
+    """
+    key, claim = "10", "Boltzmann records the lowest curiosity; ε-greedy and UCB alike"
+    evidence = "fig. 11, section 4.1 (one agent; one run per policy)"
+    return _policy_curiosity_claim(presets, key, claim, evidence, "single_agent", "multi_agent",
+                                   (("eps", "boltzmann"), ("ucb", "boltzmann")), similar=("eps", "ucb"))
+
+
+def claim_ucb_more_curious(presets: Mapping[str, Sweep]) -> ClaimResult:
+    """Claim 11: UCB's curiosity is higher than ε-greedy's (section 4.2, figs. 17 and 18 against
+    fig. 8: "the UCB runs ... show a significantly higher and more distinct curiosity reward").
+
+    Measured on multi_agent (figs. 17 and 18 are two-agent runs), per run: the mean curiosity over
+    the whole run (`run_curiosity`). Welch t-test UCB > ε-greedy across runs. Verdict: holds if
+    p < 0.05 in the paper's direction. Context, not the verdict: the same with one agent
+    (single_agent), where loaded. Scale: runs of >= 40,000 steps, >= MIN_SEEDS seeds a policy.
+    """
+    key, claim = "11", "UCB's curiosity is higher than ε-greedy's"
+    evidence = "section 4.2 (figs. 17, 18 against fig. 8; one run each)"
+    return _policy_curiosity_claim(presets, key, claim, evidence, "multi_agent", "single_agent", (("ucb", "eps"),))
+
+
+def run_curiosity(sweep: Sweep) -> np.ndarray:
+    """[runs]: the mean curiosity over the whole run, averaged over the agents."""
+    return _nanmean(sweep.metrics["curiosity"].astype(float), axis=(1, 2))
+
+
+def _policy_curiosity_claim(presets, key, claim, evidence, preset, context, pairs, similar=None) -> ClaimResult:
+    """Claims 10 and 11: Welch tests of `run_curiosity` between the policies of `preset`, each pair
+    (higher in the paper, lower); the same numbers for the `context` preset, and the `similar`
+    pair with the bound two one-sided tests put on its difference, as context."""
+    s = presets.get(preset)
+    if s is None:
+        return ClaimResult(key, claim, evidence, "n/a", _missing((preset,), presets))
+    values: dict = {}
+    found = _compare_policy_curiosity(s, f"{preset} ", pairs, similar, values)
+    if isinstance(found, str):
+        return ClaimResult(key, claim, evidence, "n/a", f"not testable: {found}")
+    stat, fails, gs, tests = found
+    stat = f"{s.name}: {stat}"
+    other = presets.get(context)
+    more = None if other is None else _compare_policy_curiosity(other, f"{context} ", pairs, similar, values)
+    if more is not None and not isinstance(more, str):
+        agents = f"{other.n_agents} agent{'s' * (other.n_agents > 1)}"
+        stat += f". Context, not the verdict: {other.name} ({agents}): {more[0]}"
+    gap = _scale_gap(s, 40_000, {g.label: g.n for g in gs.values()})
+    return ClaimResult(key, claim, evidence, stat,
+                       _decide([gap] if gap else [], fails, "every Welch test p < 0.05 in the paper's direction"),
+                       values, tests)
+
+
+def _compare_policy_curiosity(sweep: Sweep, prefix: str, pairs, similar, values: dict):
+    """(statistic, fails, groups, tests) of `_policy_curiosity_claim` on one sweep, its numbers
+    added to `values` under `prefix`; a message where the sweep lacks a policy."""
+    needed = sorted({p for pair in pairs for p in pair} | set(similar or ()), key=("eps", "boltzmann", "ucb").index)
+    gs = {p: _paper_group(sweep, p) for p in needed}
+    if any(g is None for g in gs.values()):
+        return f"{sweep.name} has no runs of {', '.join(p for p, g in gs.items() if g is None)}"
+    c = run_curiosity(sweep)
+    cells = []
+    for p, g in gs.items():
+        m = mean_ci(c[g.indices])
+        values[f"{prefix}{p}"] = _num(m[0])
+        cells.append(f"{_short(p)} {_ci(m)}")
+    parts, fails, tests = [f"mean curiosity over the run: {', '.join(cells)}"], [], {}
+    for hi, lo in pairs:
+        label = f"{_short(hi)} > {_short(lo)}"
+        x, y = c[gs[hi].indices], c[gs[lo].indices]
+        w = welch_t(x, y)
+        values[f"{prefix}{label} t"], values[f"{prefix}{label} p"] = _num(w["t"]), _num(w["p"])
+        parts.append(f"{label}: Welch t={_f(w['t'])}, p={_p(w['p'])}")
+        tests[label] = Tested(x, y)
+        if not (w["p"] < ALPHA and w["diff"] > 0):
+            fails.append(f"{label} {'significantly the other way' if w['p'] < ALPHA else 'not significant'}")
+    if similar:
+        a, b = similar
+        w = welch_t(c[gs[a].indices], c[gs[b].indices])
+        bound = tost_bound(w["diff"], w["se"], w["df"], ALPHA)
+        values.update({f"{prefix}{a} - {b}": _num(w["diff"]), f"{prefix}{a} - {b} p": _num(w["p"]),
+                       f"{prefix}{a} - {b} bound": _num(bound)})
+        parts.append(f"{_short(a)} - {_short(b)} {_f(w['diff'])}, p={_p(w['p'])}, within ±{_f(bound)} (two one-sided "
+                     "tests at 5 %)")
+    return "; ".join(parts), fails, gs, tests
+
+
 CLAIMS: tuple[Callable[[Mapping[str, Sweep]], ClaimResult], ...] = (
     claim_curiosity_dip_and_rise, claim_contact_ranking, claim_two_agents_higher, claim_agents_move_together,
     claim_prefers_moving_objects, claim_stop_least, claim_boltzmann_trembles, claim_temperatures_alike,
-    claim_self_model_predicts, claim_observational_curiosity,
+    claim_self_model_predicts, claim_observational_curiosity, claim_boltzmann_least_curious, claim_ucb_more_curious,
 )
 
 
