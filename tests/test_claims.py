@@ -45,6 +45,7 @@ def fake_sweep(name, n_agents, groups, n_windows, seeds=3, walls="same", preset=
 
 
 POLICIES = [("eps", 0.2), ("boltzmann", 1.5), ("ucb", 1.0)]
+KEYS = ["1", "2", "3", "4", "5", "6a", "6b", "6c", "7", "8", "9", "10", "11"]  # the claims, in the table's order
 
 
 def test_assign_presets_by_settings_name_and_manifest():
@@ -168,10 +169,10 @@ def test_pieces_of_one_grid_merge_over_the_keys_they_may_differ_in():
 
 def test_missing_presets_make_every_row_not_testable_with_the_name():
     table = cl.claims_table({})
-    assert [v["key"] for v in table.values] == ["1", "2", "3", "4", "5", "6a", "6b", "7", "8", "9", "10", "11"]
+    assert [v["key"] for v in table.values] == KEYS
     for v in table.values:
         assert v["verdict"].startswith("not testable: the ") and "missing" in v["verdict"]
-    assert "boltzmann_temperatures sweep is missing" in table.values[7]["verdict"]
+    assert "boltzmann_temperatures sweep is missing" in table.values[KEYS.index("7")]["verdict"]
 
 
 def test_contact_ranking_finds_a_planted_order_and_rejects_its_reverse():
@@ -774,6 +775,41 @@ def test_prefers_moving_objects_share():
     assert r.verdict.startswith("holds"), r.verdict
 
 
+def test_rotations_less_on_planted_action_counts():
+    # Every wall different, 3 seeds of 15,000 steps. In every 20-step window each move is chosen 3
+    # times, each rotation twice and stop 4 times, so a move's share is 3/20 and a rotation's 2/20,
+    # but in the last run the rotations take one step each from stop: margins 0.05, 0.05 and 0.
+    walls = fake_sweep("single_agent_walls_different", 1, [("eps", 0.2)], 750, walls="different")
+    ac = walls.metrics["action_counts"]
+    ac[:] = 0
+    ac[..., :4], ac[..., 4:6], ac[..., 6] = 3, 2, 4
+    ac[2, ..., 4:6], ac[2, ..., 6] = 3, 2
+    r = cl.claim_rotations_less({"single_agent_walls_different": walls})
+    label = "single_agent_walls_different ε-greedy (ε=0.2) (fig. 12)"
+    assert r.values[f"{label} margin"] == pytest.approx(0.1 / 3)
+    m = an.mean_ci(np.array([0.05, 0.05, 0.0]))
+    assert r.values[f"{label} margin high"] == pytest.approx(m[2])
+    assert r.verdict.startswith("does not hold: the margin's CI does not lie above 0") and "other way" not in r.verdict
+    # Every run a margin of 0.05 (no spread): holds; the context sweep (identical walls) is named
+    # but does not decide, though its rotations are chosen more.
+    ac[2, ..., 4:6], ac[2, ..., 6] = 2, 4
+    single = fake_sweep("single_agent", 1, [("eps", 0.2)], 2000)
+    single.metrics["action_counts"][:] = 0
+    single.metrics["action_counts"][..., 4:6] = 10
+    r = cl.claim_rotations_less({"single_agent_walls_different": walls, "single_agent": single})
+    assert r.verdict.startswith("holds"), r.verdict
+    assert r.values["single_agent ε-greedy (ε=0.2) (fig. 10, identical walls; context) margin"] == pytest.approx(-0.5)
+    # The rotations chosen more: the other way; too short or missing: says so.
+    ac[..., :4], ac[..., 4:6], ac[..., 6] = 2, 5, 2
+    ac[1, ..., 6] = 4
+    assert cl.claim_rotations_less({"single_agent_walls_different": walls}).verdict == (
+        "does not hold: the margin's CI does not lie above 0 (it lies below: the other way)")
+    short = fake_sweep("single_agent_walls_different", 1, [("eps", 0.2)], 100, walls="different")
+    assert cl.claim_rotations_less({"single_agent_walls_different": short}).verdict.startswith(
+        "not testable at this scale (needs runs of >= 10,000 steps")
+    assert "single_agent_walls_different sweep is missing" in cl.claim_rotations_less({"single_agent": single}).verdict
+
+
 def _plant_run_curiosity(s, levels):
     """Each run's curiosity: 0 over the first half of the windows, twice its level over the second
     (so only the mean over the whole run is the level), the agents alike."""
@@ -827,12 +863,15 @@ def test_policy_curiosity_claims_on_planted_runs():
 def test_claims_table_on_the_tiny_sweeps(tiny_sweeps_dir):
     table = an.claims_table(tiny_sweeps_dir)
     md = table.to_markdown()
-    assert [v["key"] for v in table.values] == ["1", "2", "3", "4", "5", "6a", "6b", "7", "8", "9", "10", "11"]
+    assert [v["key"] for v in table.values] == KEYS
     assert len(table.rows) == len(cl.CLAIMS) and all(len(r) == len(table.columns) for r in table.rows)
     for v in table.values:
         assert v["verdict"].startswith(cl.VERDICTS), v["verdict"]
         if v["key"] == "10":  # the tiny one-agent sweep runs ε-greedy and UCB only
             assert v["verdict"] == "not testable: single has no runs of boltzmann", v["verdict"]
+            continue
+        if v["key"] == "6c":  # no tiny sweep has different walls
+            assert v["verdict"] == "not testable: the single_agent_walls_different sweep is missing", v["verdict"]
             continue
         # 200 steps and 1-2 seeds: too small for any claim, and the table must say so.
         assert v["verdict"].startswith("not testable at this scale (needs runs of >= "), v["verdict"]

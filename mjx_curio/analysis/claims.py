@@ -509,6 +509,54 @@ def claim_stop_least(presets: Mapping[str, Sweep]) -> ClaimResult:
     return ClaimResult(key, claim, evidence, stat, _decide(gaps, fails, "every margin CI above 0"), values, tests)
 
 
+def claim_rotations_less(presets: Mapping[str, Sweep]) -> ClaimResult:
+    """Claim 6c: with a different texture on every wall, the rotations are chosen somewhat less
+    often than the four moves, which are chosen about equally (fig. 12, section 4.1.1).
+
+    Measured on the ε-greedy runs of single_agent_walls_different (fig. 12's run), per run over
+    the whole run: the margin = (mean share of forward, backward, left, right) - (mean share of
+    rotate_left, rotate_right); positive when the rotations are chosen less. Verdict: holds if
+    its 95% CI lies above 0. Context, not the verdict: the same margin on single_agent's
+    ε-greedy runs (identical walls, fig. 10), where loaded. Scale: runs of >= 10,000 steps (as
+    claim 6a), >= MIN_SEEDS seeds.
+    """
+    key, claim = "6c", "Rotations are chosen less often than the four moves"
+    evidence = "fig. 12, section 4.1.1 (one agent, ε-greedy, every wall different; one run)"
+    groups = _source_groups(presets, [("single_agent_walls_different", "eps", "fig. 12")])
+    if not groups:
+        return ClaimResult(key, claim, evidence, "n/a", _missing(("single_agent_walls_different",), presets))
+    groups += _source_groups(presets, [("single_agent", "eps", "fig. 10, identical walls; context")])
+    parts, values = [], {}
+    for label, s, g in groups:
+        margin = move_rotation_margin(s, g)
+        if margin is None:
+            return ClaimResult(key, claim, evidence, "n/a", f"not testable: {s.name} lacks the moves or rotations")
+        m = mean_ci(margin)
+        values.update({f"{label} margin": _num(m[0]), f"{label} margin high": _num(m[2])})
+        parts.append(f"{label}: margin {_ci(m)}")
+    label, s, g = groups[0]
+    margin = move_rotation_margin(s, g)
+    low, high = mean_ci(margin)[1:3]
+    other_way = " (it lies below: the other way)" if high < 0 else ""
+    fails = [] if low > 0 else [f"the margin's CI does not lie above 0{other_way}"]
+    gap = _scale_gap(s, 10_000, {label: g.n})
+    stat = ("margin = a move's mean share - a rotation's mean share (per run, the four moves and the two rotations), "
+            "mean over runs [95% CI]; " + "; ".join(parts))
+    return ClaimResult(key, claim, evidence, stat, _decide([gap] if gap else [], fails, "the margin's CI above 0"),
+                       values, {f"{label} margin": Tested(margin)})
+
+
+def move_rotation_margin(sweep: Sweep, group: Group) -> np.ndarray | None:
+    """[runs of the group]: the mean share of the four moves minus that of the two rotations
+    (`action_shares`); None where the sweep's actions lack one of them."""
+    moves, turns = ("forward", "backward", "left", "right"), ("rotate_left", "rotate_right")
+    if not set(moves + turns) <= set(sweep.actions):
+        return None
+    shares = action_shares(sweep, group)
+    return (shares[:, [sweep.actions.index(a) for a in moves]].mean(axis=1)
+            - shares[:, [sweep.actions.index(a) for a in turns]].mean(axis=1))
+
+
 def action_shares(sweep: Sweep, group: Group) -> np.ndarray:
     """[runs of the group, actions]: each action's share of all steps of the run (agents pooled)."""
     counts = sweep.metrics["action_counts"][group.indices].astype(float).sum(axis=(1, 2))
@@ -1012,8 +1060,9 @@ def _compare_policy_curiosity(sweep: Sweep, prefix: str, pairs, similar, values:
 
 CLAIMS: tuple[Callable[[Mapping[str, Sweep]], ClaimResult], ...] = (
     claim_curiosity_dip_and_rise, claim_contact_ranking, claim_two_agents_higher, claim_agents_move_together,
-    claim_prefers_moving_objects, claim_stop_least, claim_boltzmann_trembles, claim_temperatures_alike,
-    claim_self_model_predicts, claim_observational_curiosity, claim_boltzmann_least_curious, claim_ucb_more_curious,
+    claim_prefers_moving_objects, claim_stop_least, claim_boltzmann_trembles, claim_rotations_less,
+    claim_temperatures_alike, claim_self_model_predicts, claim_observational_curiosity, claim_boltzmann_least_curious,
+    claim_ucb_more_curious,
 )
 
 
