@@ -775,6 +775,46 @@ def test_prefers_moving_objects_share():
     assert r.verdict.startswith("holds"), r.verdict
 
 
+def test_policies_parts_compare_each_part_over_the_whole_run():
+    # One agent: ε-greedy and UCB in one sweep of 40,000 steps, Boltzmann in another of 30,000, so
+    # Boltzmann is compared over steps 0-30,000 and UCB with ε-greedy over all 40,000. Planted:
+    # Boltzmann's spread 0.1 above the others', its error the same; after step 30,000 the ε and UCB
+    # spread is far off, to show it is not read against Boltzmann.
+    # A Boltzmann group at another temperature, and a z=mean sweep, are left out.
+    rng = np.random.default_rng(12)
+    greedy = fake_sweep("single_agent.spread", 1, [("eps", 0.2), ("ucb", 1.0)], 2000, seeds=4)
+    boltz = fake_sweep("single_agent.spread_boltzmann", 1, [("boltzmann", 1.5), ("boltzmann", 0.5)], 1500, seeds=5)
+    mean_latent = fake_sweep("single_agent.z_mean", 1, [("boltzmann", 1.5)], 2000, z="mean")
+    for s, spread in ((greedy, 0.3), (boltz, 0.4)):
+        shape = s.metrics["curiosity"].shape
+        s.metrics["curiosity_spread"][:] = np.where(s.steps <= 30_000, spread, 9.0)[None, :, None]
+        s.metrics["curiosity_spread"][:] += 0.01 * rng.normal(size=shape)
+        s.metrics["curiosity"][:] = s.metrics["curiosity_spread"] + 0.05 + 0.01 * rng.normal(size=shape)
+    boltz.metrics["curiosity"][boltz.groups("boltzmann")[1].indices] += 5.0  # T = 0.5: not the paper's setting
+    t = an.policies_parts_table({"single_agent.spread": greedy, "single_agent.spread_boltzmann": boltz,
+                                 "single_agent.z_mean": mean_latent})
+    assert [(v["policy"], v["against"]) for v in t.values[::3]] == [("boltzmann", "eps"), ("boltzmann", "ucb"),
+                                                                    ("ucb", "eps")]
+    assert [v["to"] for v in t.values[::3]] == [30_000, 30_000, 40_000] and {v["agents"] for v in t.values} == {1}
+    def run_means(s, policy, part, to):
+        g = s.groups(policy)[0]  # the paper's setting comes first here
+        c, v = (s.metrics[k][g.indices][:, s.steps <= to].astype(float) for k in ("curiosity", "curiosity_spread"))
+        return {"curiosity": c, "spread": v, "error": c - v}[part].mean(axis=(1, 2))
+
+    for v in t.values:
+        x1 = run_means(boltz if v["policy"] == "boltzmann" else greedy, v["policy"], v["part"], v["to"])
+        x2 = run_means(greedy, v["against"], v["part"], v["to"])
+        assert v["mean"] == pytest.approx(x1.mean(), abs=1e-6)
+        assert v["against_mean"] == pytest.approx(x2.mean(), abs=1e-6)
+        assert v["p"] == pytest.approx(an.welch_t(x1, x2)["p"], rel=1e-4)
+    rows = {(v["policy"], v["against"], v["part"]): v for v in t.values}
+    assert rows["boltzmann", "eps", "spread"]["diff"] == pytest.approx(0.1, abs=0.01)
+    assert rows["boltzmann", "eps", "spread"]["p"] < 0.001
+    assert abs(rows["boltzmann", "eps", "error"]["diff"]) < 0.01 and abs(rows["ucb", "eps", "spread"]["diff"]) < 0.01
+    # With one policy alone there is nothing to set against it.
+    assert an.policies_parts_table({"single_agent.spread_boltzmann": boltz}).rows == []
+
+
 def test_rotations_less_on_planted_action_counts():
     # Every wall different, 3 seeds of 15,000 steps. In every 20-step window each move is chosen 3
     # times, each rotation twice and stop 4 times, so a move's share is 3/20 and a rotation's 2/20,

@@ -427,7 +427,10 @@ def test_page_blocks_on_the_tiny_sweeps(results, tiny_sweeps_dir, tmp_path):
     # two-agent sweep, the groups they share (eps and UCB), three parts each.
     n_one, n_two = (sum(s is presets[k] for s in presets.values()) for k in ("single_agent", "multi_agent"))
     shared = {g.label for g in presets["single_agent"].groups()} & {g.label for g in presets["multi_agent"].groups()}
+    agents, policies = agents.split("\n\n| agents | policy (sweep) |")  # then claims 10 and 11's
     assert sum(r.startswith("| `") for r in agents.splitlines()) == n_one * n_two * len(shared) * 3 > 0
+    # Claims 10 and 11's: the tiny two-agent sweep's three policy pairs, the one-agent's UCB against ε.
+    assert sum(r.startswith(("| 1 |", "| 2 |")) for r in policies.splitlines()) == (3 + 1) * 3
     assert [r[3] for r in parts[:3]] == list(an.PARTS.values())
     assert all(float(r[4]) > 0 and r[5:9] == ["n/a"] * 4 for r in parts if r[3] != "error against the posterior mean")
     temperatures = results.temperatures_block(presets)

@@ -92,8 +92,9 @@ action_values, curiosity_parts, self_model and temperatures):
     curiosity_parts  claim 1's fall and rise split into the world model's error against the posterior
               mean and the posterior's spread, from sweeps that record the spread:
               `curiosity_parts_table`, `parts_fall_rise`, `curiosity_parts`, `records_spread`,
-              `samples_latent` (z=sample; under z=mean the curiosity is all error); and claim 3
-              (one agent against two) part by part: `agents_parts_table`
+              `samples_latent` (z=sample; under z=mean the curiosity is all error); claim 3 (one
+              agent against two) part by part: `agents_parts_table`; and claims 10 and 11 (one
+              policy against another): `policies_parts_table`
     walls     what a different texture on every wall changes: `walls_table` (each walls-different
               preset against its identical-walls preset, per policy) and `walls_measures`
     figures   every `plot_*` function, the colours and labels they share, and saving
@@ -148,10 +149,12 @@ from mjx_curio.analysis.claims import (
 from mjx_curio.analysis.curiosity_parts import (
     MEAN_LATENT_PART,
     PARTS,
+    POLICY_PAIRS,
     agents_parts_table,
     curiosity_parts,
     curiosity_parts_table,
     parts_fall_rise,
+    policies_parts_table,
     records_spread,
     samples_latent,
 )
@@ -278,7 +281,8 @@ __all__ = [
     # curiosity_noise
     "CuriosityNoise", "curiosity_noise", "posterior_dims", "posterior_spread",
     # curiosity_parts
-    "MEAN_LATENT_PART", "PARTS", "agents_parts_table", "curiosity_parts", "curiosity_parts_table", "parts_fall_rise",
+    "MEAN_LATENT_PART", "PARTS", "POLICY_PAIRS", "agents_parts_table", "curiosity_parts", "curiosity_parts_table",
+    "parts_fall_rise", "policies_parts_table",
     "records_spread", "samples_latent",
     # tables
     "Table", "headline_table",

@@ -11,7 +11,8 @@ spread's, the world model is not growing more surprised; its VAE is growing less
 
 The same split reads claim 3 (two agents more curious than one) part by part: a second agent may
 raise the world model's error, which its moves make harder to foresee, while the curiosity as a
-whole does not move (`agents_parts_table`).
+whole does not move (`agents_parts_table`); and claims 10 and 11, the policies' curiosity, part
+by part (`policies_parts_table`).
 """
 
 from __future__ import annotations
@@ -131,6 +132,51 @@ def agents_parts_table(presets: Mapping[str, Sweep]) -> Table:
     note = (f"Claim 3 part by part: each run's mean over steps {window} (the second half of the steps both sweeps "
             "ran, claim 3's window) of the curiosity (mean of the agents) and its parts, from the sweeps that record "
             "the spread with sampled latents; mean over runs [95 % CI]; Welch's t-test of two agents minus one.")
+    return Table(cols, rows, values, note if rows else "")
+
+
+# Claims 10 and 11, part by part: (policy, against policy), the first the one the claims single out.
+POLICY_PAIRS = (("boltzmann", "eps"), ("boltzmann", "ucb"), ("ucb", "eps"))
+
+
+def policies_parts_table(presets: Mapping[str, Sweep]) -> Table:
+    """Claims 10 and 11 part by part: one policy against another with the same number of agents,
+    each from a sweep that records the spread with sampled latents (z=sample), for the pairs of
+    `POLICY_PAIRS` such sweeps ran (the paper's setting of each policy; the first sweep of a policy
+    where several ran it). Per part (`PARTS`): each run's mean over the whole run (claims 10 and
+    11's measure; over the steps both sweeps ran), mean over runs [95 % CI] for each policy, and
+    Welch's t-test of the first minus the second."""
+    from mjx_curio.analysis.claims import PAPER_SETTING
+
+    found: dict[tuple[int, str], tuple[str, Sweep, Group]] = {}
+    for name, s in presets.items():
+        if not (records_spread(s) and samples_latent(s)):
+            continue
+        for g in s.groups():
+            if np.isclose(g.value, PAPER_SETTING[g.policy]):
+                found.setdefault((s.n_agents, g.policy), (name, s, g))
+    cols = ["agents", "policy (sweep)", "against (sweep)", "part", "policy", "runs", "against", "runs", "difference",
+            "Welch p"]
+    rows, values = [], []
+    for agents in sorted({a for a, _ in found}):
+        for first, second in POLICY_PAIRS:
+            if (agents, first) not in found or (agents, second) not in found:
+                continue
+            (n1, s1, g1), (n2, s2, g2) = found[agents, first], found[agents, second]
+            hi = min(s1.steps_done, s2.steps_done)
+            p1, p2 = curiosity_parts(s1, g1), curiosity_parts(s2, g2)
+            for part, what in PARTS.items():
+                x1, x2 = block_mean(s1, p1[part], 0, hi), block_mean(s2, p2[part], 0, hi)
+                m1, m2, w = mean_ci(x1), mean_ci(x2), welch_t(x1, x2)
+                rows.append([str(agents), f"{g1.label} (`{n1}`)", f"{g2.label} (`{n2}`)", what, _ci(m1), str(g1.n),
+                             _ci(m2), str(g2.n), _f(w["diff"]), f"{w['p']:.3g}" if np.isfinite(w["p"]) else "n/a"])
+                values.append({"agents": agents, "policy": first, "against": second, "sweep": n1, "against_sweep": n2,
+                               "part": part, "to": hi, "mean": float(m1[0]), "against_mean": float(m2[0]),
+                               "diff": w["diff"], "t": w["t"], "p": w["p"]})
+    note = ("Claims 10 and 11 part by part: each run's mean over the whole run (over the steps both sweeps ran) of the "
+            "curiosity (mean of the agents) and its parts, from the sweeps that record the spread with sampled "
+            "latents, the paper's setting of each policy; mean over runs [95 % CI]; Welch's t-test of the policy "
+            "minus the one it is set against.")
     return Table(cols, rows, values, note if rows else "")
 
 
