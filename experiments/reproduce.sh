@@ -84,6 +84,10 @@
 # above, 46-54 run-steps/s):
 #     python -m mjx_curio.sweep preset=single_agent policies=ucb seeds=4 steps=40000 checkpoint_every=1000 out=runs/paper/single_agent.spread_ucb
 #     python experiments/spread_evidence.py runs/paper/single_agent.spread_ucb
+# and for one Boltzmann agent (claim 10's setting, beside the one-agent epsilon-greedy and UCB ones;
+# 56 min alone on the Intel Xeon above, 44-51 run-steps/s):
+#     python -m mjx_curio.sweep preset=single_agent policies=boltzmann seeds=4 steps=40000 checkpoint_every=1000 out=runs/paper/single_agent.spread_boltzmann
+#     python experiments/spread_evidence.py runs/paper/single_agent.spread_boltzmann
 # The same side experiment with the posterior mean as the latent (z=mean, not the paper's
 # setting: the curiosity is then the world model's error alone), 4 seeds x 40,000 steps (49 min
 # on the Intel Xeon above, 46-59 run-steps/s), not run by this script either:

@@ -667,6 +667,8 @@ def _figures() -> tuple[Figure, ...]:
                                 "UCB (fig. 18's setting)", "fig. 18"),
         _curiosity_parts_figure("single_agent_ucb_curiosity_parts", "single_agent.spread_ucb", "ucb", 1,
                                 "UCB (claim 3's setting)", "fig. 23"),
+        _curiosity_parts_figure("single_agent_boltzmann_curiosity_parts", "single_agent.spread_boltzmann", "boltzmann",
+                                1, "Boltzmann (claim 10's setting)", "fig. 11"),
         _error_without_spread_figure("single_agent_error_without_spread", "single_agent", 1, "fig. 8's setting"),
         _error_without_spread_figure("multi_agent_error_without_spread", "multi_agent", 2, "fig. 17's setting"),
         *_temperature_figures("boltzmann_temperatures", "Boltzmann temperatures T = 0.5 to 2.5", "0.5", "2.5",
