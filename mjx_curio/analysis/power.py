@@ -163,13 +163,10 @@ def largest_allowed(tested: Tested, alpha: float = ALPHA) -> float:
     alone; `detectable` says it from the spread, before looking at the effect."""
     if tested.blocked:
         return equivalence_bound(tested.x, alpha)["bound"]
-    x = finite(tested.x)
     if tested.y is None:
-        if len(x) < 2:
-            return math.nan
-        se, df = float(x.std(ddof=1)) / math.sqrt(len(x)), len(x) - 1
+        se, df = _one_sample(tested)
     else:
-        w = welch_t(x, tested.y)
+        w = welch_t(tested.x, tested.y)
         if w["nx"] >= 2 and w["ny"] >= 2 and not math.isfinite(w["se"]):
             return effect(tested)  # no spread on either side: the effect is known exactly
         se, df = w["se"], w["df"]
@@ -186,13 +183,20 @@ def p_value(tested: Tested) -> float:
         return math.nan
     if tested.y is not None:
         return welch_t(tested.x, tested.y)["p"]
+    se, df = _one_sample(tested)
+    d = effect(tested)
+    if se == 0:
+        return 0.0 if d != 0 else math.nan
+    return t_pvalue(d / se, df)
+
+
+def _one_sample(tested: Tested) -> tuple[float, float]:
+    """(standard error, degrees of freedom) of a one-sample test's mean over the runs it has;
+    NaN below 2 runs."""
     x = finite(tested.x)
     if len(x) < 2:
-        return math.nan
-    sd = float(x.std(ddof=1))
-    if sd == 0:
-        return 0.0 if x.mean() != tested.null else math.nan
-    return t_pvalue((x.mean() - tested.null) / (sd / math.sqrt(len(x))), len(x) - 1)
+        return math.nan, math.nan
+    return float(x.std(ddof=1)) / math.sqrt(len(x)), len(x) - 1
 
 
 def power_table(sweeps) -> Table:
