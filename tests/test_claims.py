@@ -45,7 +45,7 @@ def fake_sweep(name, n_agents, groups, n_windows, seeds=3, walls="same", preset=
 
 
 POLICIES = [("eps", 0.2), ("boltzmann", 1.5), ("ucb", 1.0)]
-KEYS = ["1", "2", "3", "4", "5", "6a", "6b", "6c", "7", "8", "9", "10", "11"]  # the claims, in the table's order
+KEYS = ["1", "2", "3", "4", "5", "6a", "6b", "6c", "7", "8", "9", "10", "11", "12", "13"]  # the claims, in the table's order
 
 
 def test_assign_presets_by_settings_name_and_manifest():
@@ -896,6 +896,66 @@ def test_policy_curiosity_claims_on_planted_runs():
     assert cl.claim_ucb_more_curious({"multi_agent": short}).verdict.startswith(
         "not testable at this scale (needs runs of >= 40,000 steps (multi_agent has 2,000)")
 
+
+
+def test_contacts_raise_curiosity_on_planted_windows():
+    rng = np.random.default_rng(12)
+    single = fake_sweep("single_agent", 1, POLICIES, 600, seeds=3)  # 12,000 steps
+    multi = fake_sweep("multi_agent", 2, POLICIES, 600, seeds=3)
+    for s in (single, multi):
+        shape = s.metrics["curiosity"].shape  # [R, W, A]
+        touching = rng.random(shape) < 0.1
+        s.metrics["contact_object"][..., 1] = np.where(touching, 3, 0)  # the cylinder, 3 steps of the window
+        s.metrics["curiosity"][:] = 0.5 + 0.01 * rng.normal(size=shape) + 0.04 * touching
+    g = cl._paper_group(single, "eps")
+    d = cl.contact_excess(single, g)
+    assert d["diff"] == pytest.approx(np.full(3, 0.04), abs=0.01)
+    assert d["n_touching"] + d["n_apart"] == 3 * 599  # window 0 left out
+    r = cl.claim_contacts_raise_curiosity({"single_agent": single, "multi_agent": multi})
+    assert r.verdict == "holds (every CI above 0)", r.verdict
+    assert set(r.tests) == {"single_agent ε-greedy (ε=0.2) (fig. 9) excess touching - apart",
+                            "multi_agent UCB (c=1) (section 4.1.2) excess touching - apart"}
+    assert "Context, not the verdict: single_agent Boltzmann (T=1.5) (one agent)" in r.statistic
+    # Windows where the agent touched only the other agent are neither touching nor apart.
+    ucb = cl._paper_group(multi, "ucb")
+    before = cl.contact_excess(multi, ucb)
+    multi.metrics["contact_agent"][:, 1] = 1
+    after = cl.contact_excess(multi, ucb)
+    only_agent = int((multi.metrics["contact_object"][ucb.indices, 1].sum(axis=-1) == 0).sum())
+    assert after["n_touching"] == before["n_touching"] and after["n_apart"] == before["n_apart"] - only_agent > 0
+    # Without the planted rise in the UCB runs, the claim fails there, and says so.
+    multi.metrics["curiosity"][:] = 0.5 + 0.01 * rng.normal(size=multi.metrics["curiosity"].shape)
+    r = cl.claim_contacts_raise_curiosity({"single_agent": single, "multi_agent": multi})
+    assert r.verdict == "does not hold: multi_agent UCB (c=1) (section 4.1.2): the CI does not lie above 0", r.verdict
+    # Too few touching windows: the run drops out, and too few runs make it untestable.
+    single.metrics["contact_object"][:] = 0
+    single.metrics["contact_object"][:, 5, 0, 1] = 1
+    assert np.isnan(cl.contact_excess(single, g)["diff"]).all()
+    assert cl.claim_contacts_raise_curiosity({"single_agent": single}).verdict.startswith("not testable at this scale")
+
+
+def test_contacts_begin_late_on_planted_rates():
+    single = fake_sweep("single_agent", 1, POLICIES, 2000, seeds=3)  # 40,000 steps
+    g = cl._paper_group(single, "eps")
+    # 1 contact step a window (50 per 1,000 steps) before step 25,000, 4 or 5 from then on.
+    onset = 25_000 // 20
+    for k, r in enumerate(g.indices):
+        single.metrics["contact_object"][r, :onset, 0, 2] = 1
+        single.metrics["contact_object"][r, onset:, 0, 2] = 4 + k % 2
+    d = cl.contact_onset(single, g)
+    assert d["before"] == pytest.approx(np.full(3, 50.0))
+    assert d["after"] == pytest.approx([200.0, 250.0, 200.0])
+    r = cl.claim_contacts_begin_late({"single_agent": single})
+    assert r.verdict == "holds (the rise's CI above 0)", r.verdict
+    assert r.values["single_agent ε-greedy (ε=0.2) (fig. 9) rise"] == pytest.approx(500 / 3)
+    # The same rate throughout does not hold; a sweep of half the length cannot test it.
+    single.metrics["contact_object"][g.indices, onset:, 0, 2] = 1
+    assert cl.claim_contacts_begin_late({"single_agent": single}).verdict == (
+        "does not hold: the rise's CI does not lie above 0")
+    short = fake_sweep("single_agent", 1, POLICIES, 1000)
+    assert cl.claim_contacts_begin_late({"single_agent": short}).verdict.startswith(
+        "not testable at this scale (needs runs of >= 40,000 steps (single_agent has 20,000)")
+    assert "single_agent sweep is missing" in cl.claim_contacts_begin_late({}).verdict
 
 # ------------------------------------------------------------------------------ the tiny sweeps
 

@@ -963,6 +963,121 @@ def watching_excess(sweep: Sweep, window: int = SMOOTH, moved_m: float = 0.01) -
     return {"watching": w, "quiet": q, "diff": w - q, "n_watching": int(watching.sum()), "n_quiet": int(quiet.sum())}
 
 
+
+def claim_contacts_raise_curiosity(presets: Mapping[str, Sweep]) -> ClaimResult:
+    """Claim 12: an agent's own contacts with objects raise its curiosity (fig. 9 and section 4.1:
+    the agent starts to interact with objects "coinciding with the steepest ascent in curiosity";
+    section 4.1.2: UCB's many object interactions are "one reason why the curiosity reward is
+    comparatively high").
+
+    Measured per agent and 20-step window, as claim 9 measures watching: curiosity relative to the
+    agent's trailing moving average of 50 windows (the slow learning trend removed), "touching" =
+    the agent touched an object during the window, "apart" = it touched nothing (no object, not
+    the other agent); window 0 is left out. Per run: mean excess while touching - mean excess
+    while apart (the agents' windows pooled), NaN for a run with fewer than 5 touching windows.
+    Groups: single_agent ε-greedy (fig. 9's run) and multi_agent UCB (section 4.1.2's), those
+    loaded. Verdict: holds if in every group the 95% CI across runs lies above 0. Context, not the
+    verdict: the other policies of both sweeps. Scale: runs of >= 10,000 steps (past the initial
+    fall), >= MIN_SEEDS runs with touching windows a group.
+    """
+    key, claim = "12", "An agent's own contacts with objects raise its curiosity"
+    evidence = "fig. 9, sections 4.1 (one agent, ε-greedy) and 4.1.2 (two agents, UCB); one run each"
+    deciding = {("single_agent", "eps"): "fig. 9", ("multi_agent", "ucb"): "section 4.1.2"}
+    groups = _source_groups(presets, [(preset, p, fig) for (preset, p), fig in deciding.items()])
+    if not groups:
+        return ClaimResult(key, claim, evidence, "n/a", _missing(("single_agent", "multi_agent"), presets))
+    decide = {label for label, _, _ in groups}
+    agents = {"single_agent": "one agent", "multi_agent": "two agents"}
+    groups += _source_groups(presets, [(preset, p, agents[preset]) for preset in agents
+                                       for p in ("eps", "boltzmann", "ucb") if (preset, p) not in deciding])
+    parts, context_parts, values, fails, tests, sizes = [], [], {}, [], {}, []
+    for label, s, g in groups:
+        d = contact_excess(s, g)
+        m = mean_ci(d["diff"])
+        n = int(np.isfinite(d["diff"]).sum())
+        values.update({f"{label} diff": _num(m[0]), f"{label} diff low": _num(m[1]), f"{label} runs": n})
+        cell = f"{label}: {_ci(m)}, {d['n_touching']:,} touching and {d['n_apart']:,} apart windows"
+        if label not in decide:
+            context_parts.append(cell)
+            continue
+        parts.append(cell)
+        tests[f"{label} excess touching - apart"] = Tested(d["diff"])
+        sizes.append((s, 10_000, {f"{label} runs with contacts": n}))
+        if not m[1] > 0:
+            fails.append(f"{label}: the CI does not lie above 0")
+    stat = ("curiosity above the agent's moving average while it touches an object - while it touches nothing, "
+            "mean over runs [95% CI]; " + "; ".join(parts))
+    if context_parts:
+        stat += ". Context, not the verdict: " + "; ".join(context_parts)
+    gap = _scale_gaps(sizes)
+    return ClaimResult(key, claim, evidence, stat, _decide([gap] if gap else [], fails, "every CI above 0"), values,
+                       tests)
+
+
+def contact_excess(sweep: Sweep, group: Group, window: int = SMOOTH, min_windows: int = 5) -> dict:
+    """Per run of `group`: {"touching", "apart", "diff"} mean excess curiosity (arrays [runs]) and
+    the window counts {"n_touching", "n_apart"}, as `claim_contacts_raise_curiosity` defines them."""
+    m = sweep.metrics
+    touching = m["contact_object"][group.indices].sum(axis=3) > 0  # [n, W, A]
+    other = m["contact_agent"][group.indices] > 0
+    valid = np.zeros(touching.shape, bool)
+    valid[:, 1:] = True
+    touching, apart = valid & touching, valid & ~touching & ~other
+    cur = m["curiosity"][group.indices].astype(float)
+    excess = cur - moving_average(cur, window, axis=1)
+    t = _nanmean(np.where(touching, excess, np.nan), axis=(1, 2))
+    a = _nanmean(np.where(apart, excess, np.nan), axis=(1, 2))
+    t = np.where(touching.sum(axis=(1, 2)) >= min_windows, t, np.nan)
+    return {"touching": t, "apart": a, "diff": t - a, "n_touching": int(touching.sum()), "n_apart": int(apart.sum())}
+
+
+CONTACT_ONSET = 25_000  # fig. 9: "around 25 000 training steps ... the agent begins to interact frequently"
+
+
+def claim_contacts_begin_late(presets: Mapping[str, Sweep]) -> ClaimResult:
+    """Claim 13: the agent begins to interact frequently with objects only around 25,000 steps
+    (fig. 9, section 4.1: "for the first time").
+
+    Measured on the ε-greedy runs of single_agent (fig. 9's run), per run: the agent-object contact
+    steps per 1,000 steps after step 25,000 minus those before it (`contact_onset`). Verdict: holds
+    if the 95% CI across runs lies above 0 (contacts more frequent after 25,000 steps than
+    before). Context, not the verdict: the same for multi_agent's ε-greedy and UCB runs (fig. 21's
+    curves: "UCB achieves 60% of its total interactions by 40,000 steps"). Scale: runs of >= 40,000
+    steps (15,000 steps after the onset), >= MIN_SEEDS seeds.
+    """
+    key, claim = "13", "Frequent contacts with objects begin only around 25,000 steps"
+    evidence = "fig. 9, section 4.1 (one agent, ε-greedy; one run)"
+    groups = _source_groups(presets, [("single_agent", "eps", "fig. 9")])
+    if not groups:
+        return ClaimResult(key, claim, evidence, "n/a", _missing(("single_agent",), presets))
+    groups += _source_groups(presets, [("multi_agent", "eps", "two agents"), ("multi_agent", "ucb", "two agents")])
+    parts, values = [], {}
+    for label, s, g in groups:
+        d = contact_onset(s, g)
+        b, a, m = mean_ci(d["before"]), mean_ci(d["after"]), mean_ci(d["rise"])
+        values.update({f"{label} before": _num(b[0]), f"{label} after": _num(a[0]), f"{label} rise": _num(m[0]),
+                       f"{label} rise low": _num(m[1])})
+        parts.append(f"{label}: before {_ci(b)}, after {_ci(a)}, rise {_ci(m)}")
+    (label, s, g), rise = groups[0], contact_onset(groups[0][1], groups[0][2])["rise"]
+    low = mean_ci(rise)[1]
+    fails = [] if low > 0 else ["the rise's CI does not lie above 0"]
+    gap = _scale_gap(s, 40_000, {label: g.n})
+    stat = (f"object contact steps per 1,000 steps before and after step {CONTACT_ONSET:,}, and rise = after - "
+            "before, mean over runs [95% CI]; " + "; ".join(parts[:1]))
+    if parts[1:]:
+        stat += ". Context, not the verdict: " + "; ".join(parts[1:])
+    return ClaimResult(key, claim, evidence, stat, _decide([gap] if gap else [], fails, "the rise's CI above 0"),
+                       values, {f"{label} rise": Tested(rise)})
+
+
+def contact_onset(sweep: Sweep, group: Group, at: int = CONTACT_ONSET) -> dict:
+    """Per run of `group`: {"before", "after", "rise"}: agent-object contact steps (all agents) per
+    1,000 steps over the windows wholly before step `at`, wholly after it, and after - before."""
+    per_1000 = object_contacts(sweep)[group.indices].astype(float) * (1000 / sweep.metrics_every)
+    before = block_mean(sweep, per_1000, 0, at)
+    after = block_mean(sweep, per_1000, at, sweep.steps_done)
+    return {"before": before, "after": after, "rise": after - before}
+
 def claim_boltzmann_least_curious(presets: Mapping[str, Sweep]) -> ClaimResult:
     """Claim 10: Boltzmann records the lowest curiosity of the three policies, throughout the run;
     ε-greedy and UCB follow similar curves (fig. 11, section 4.1).
@@ -1062,7 +1177,7 @@ CLAIMS: tuple[Callable[[Mapping[str, Sweep]], ClaimResult], ...] = (
     claim_curiosity_dip_and_rise, claim_contact_ranking, claim_two_agents_higher, claim_agents_move_together,
     claim_prefers_moving_objects, claim_stop_least, claim_boltzmann_trembles, claim_rotations_less,
     claim_temperatures_alike, claim_self_model_predicts, claim_observational_curiosity, claim_boltzmann_least_curious,
-    claim_ucb_more_curious,
+    claim_ucb_more_curious, claim_contacts_raise_curiosity, claim_contacts_begin_late,
 )
 
 
