@@ -916,6 +916,16 @@ def test_contacts_raise_curiosity_on_planted_windows():
     assert set(r.tests) == {"single_agent ε-greedy (ε=0.2) (fig. 9) excess touching - apart",
                             "multi_agent UCB (c=1) (section 4.1.2) excess touching - apart"}
     assert "Context, not the verdict: single_agent Boltzmann (T=1.5) (one agent)" in r.statistic
+    # A view full of objects that surprises by itself: the raw difference takes it for touching,
+    # the fit with the view's fill held fixed does not.
+    fill = np.where(single.metrics["contact_object"][..., 1] > 0, 0.3, 0.0) + 0.6 * rng.random(shape[:2] + (1,))
+    single.metrics["view_fraction"][..., 1] = fill
+    single.metrics["curiosity"][:] = 0.5 + 0.001 * rng.normal(size=single.metrics["curiosity"].shape) + 0.1 * fill
+    d = cl.contact_excess(single, g)
+    assert d["diff"] == pytest.approx(np.full(3, 0.03), abs=0.005)
+    assert d["beyond_view"] == pytest.approx(np.zeros(3), abs=0.002)
+    single.metrics["curiosity"] += 0.03 * (single.metrics["contact_object"][..., 1] > 0)
+    assert cl.contact_excess(single, g)["beyond_view"] == pytest.approx(np.full(3, 0.03), abs=0.002)
     # Windows where the agent touched only the other agent are neither touching nor apart.
     ucb = cl._paper_group(multi, "ucb")
     before = cl.contact_excess(multi, ucb)

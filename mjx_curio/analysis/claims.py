@@ -975,7 +975,10 @@ def claim_contacts_raise_curiosity(presets: Mapping[str, Sweep]) -> ClaimResult:
     the agent touched an object during the window, "apart" = it touched nothing (no object, not
     the other agent); window 0 is left out. Per run: mean excess while touching - mean excess
     while apart (the agents' windows pooled), NaN for a run with fewer than 5 touching windows.
-    Groups: single_agent ε-greedy (fig. 9's run) and multi_agent UCB (section 4.1.2's), those
+    Reported alongside, not the verdict: the same difference with the share of the view that the
+    objects and the other agent fill held fixed (per run, the touching coefficient of a least-squares
+    fit of the excess on touching, that share and its square), since a touching agent faces an object
+    close up and a view full of objects may surprise by itself. Groups: single_agent ε-greedy (fig. 9's run) and multi_agent UCB (section 4.1.2's), those
     loaded. Verdict: holds if in every group the 95% CI across runs lies above 0. Context, not the
     verdict: the other policies of both sweeps. Scale: runs of >= 10,000 steps (past the initial
     fall), >= MIN_SEEDS runs with touching windows a group.
@@ -993,10 +996,12 @@ def claim_contacts_raise_curiosity(presets: Mapping[str, Sweep]) -> ClaimResult:
     parts, context_parts, values, fails, tests, sizes = [], [], {}, [], {}, []
     for label, s, g in groups:
         d = contact_excess(s, g)
-        m = mean_ci(d["diff"])
+        m, b = mean_ci(d["diff"]), mean_ci(d["beyond_view"])
         n = int(np.isfinite(d["diff"]).sum())
-        values.update({f"{label} diff": _num(m[0]), f"{label} diff low": _num(m[1]), f"{label} runs": n})
-        cell = f"{label}: {_ci(m)}, {d['n_touching']:,} touching and {d['n_apart']:,} apart windows"
+        values.update({f"{label} diff": _num(m[0]), f"{label} diff low": _num(m[1]), f"{label} runs": n,
+                       f"{label} beyond view": _num(b[0]), f"{label} beyond view low": _num(b[1])})
+        cell = (f"{label}: {_ci(m)}, {d['n_touching']:,} touching and {d['n_apart']:,} apart windows; the view's "
+                f"fill held fixed {_ci(b)}")
         if label not in decide:
             context_parts.append(cell)
             continue
@@ -1015,8 +1020,9 @@ def claim_contacts_raise_curiosity(presets: Mapping[str, Sweep]) -> ClaimResult:
 
 
 def contact_excess(sweep: Sweep, group: Group, window: int = SMOOTH, min_windows: int = 5) -> dict:
-    """Per run of `group`: {"touching", "apart", "diff"} mean excess curiosity (arrays [runs]) and
-    the window counts {"n_touching", "n_apart"}, as `claim_contacts_raise_curiosity` defines them."""
+    """Per run of `group`: {"touching", "apart", "diff"} mean excess curiosity, "beyond_view" the
+    touching coefficient with the view's fill held fixed (arrays [runs]), and the window counts
+    {"n_touching", "n_apart"}, as `claim_contacts_raise_curiosity` defines them."""
     m = sweep.metrics
     touching = m["contact_object"][group.indices].sum(axis=3) > 0  # [n, W, A]
     other = m["contact_agent"][group.indices] > 0
@@ -1027,8 +1033,17 @@ def contact_excess(sweep: Sweep, group: Group, window: int = SMOOTH, min_windows
     excess = cur - moving_average(cur, window, axis=1)
     t = _nanmean(np.where(touching, excess, np.nan), axis=(1, 2))
     a = _nanmean(np.where(apart, excess, np.nan), axis=(1, 2))
-    t = np.where(touching.sum(axis=(1, 2)) >= min_windows, t, np.nan)
-    return {"touching": t, "apart": a, "diff": t - a, "n_touching": int(touching.sum()), "n_apart": int(apart.sum())}
+    enough = touching.sum(axis=(1, 2)) >= min_windows
+    t = np.where(enough, t, np.nan)
+    fill = np.nan_to_num(m["view_fraction"][group.indices].astype(float)).sum(axis=3)  # [n, W, A]
+    beyond = np.full(len(group.indices), np.nan)
+    for r in np.flatnonzero(enough):  # one small least-squares fit a run
+        ok = (touching[r] | apart[r]) & np.isfinite(excess[r])
+        v = fill[r][ok]
+        x = np.stack([np.ones_like(v), touching[r][ok].astype(float), v, v * v], axis=1)
+        beyond[r] = np.linalg.lstsq(x, excess[r][ok], rcond=None)[0][1]
+    return {"touching": t, "apart": a, "diff": t - a, "beyond_view": beyond, "n_touching": int(touching.sum()),
+            "n_apart": int(apart.sum())}
 
 
 CONTACT_ONSET = 25_000  # fig. 9: "around 25 000 training steps ... the agent begins to interact frequently"
