@@ -444,9 +444,48 @@ def claims_block(presets: dict) -> str:
 
 
 def power_block(presets: dict) -> str:
+    """The power table, and below it the figure of every test's effect where one has two runs."""
     from mjx_curio import analysis as an
 
-    return an.power_table(presets).to_markdown()
+    table = an.power_table(presets)
+    md = table.to_markdown()
+    if _has_effects(table):
+        md += f"\n![{CLAIM_EFFECTS}](figures/results/{CLAIM_EFFECTS}.png)\n\n*{CLAIM_EFFECTS_CAPTION}*\n"
+    return md
+
+
+CLAIM_EFFECTS = "claim_effects"
+CLAIM_EFFECTS_CAPTION = (
+    "The table's tests on one axis, in the claims' order. x: each test's effect divided by the standard deviation "
+    "across runs (two samples: the root of the mean of the two variances), the paper's direction to the right; line: "
+    "its 95 % interval, from the test's own standard error (Student's t of one sample, Welch's of two). Blue: the "
+    "interval lies on the paper's side of 0; red: on the other side; grey: it spans 0. Filled: significant after "
+    "Holm's adjustment over all the tests; hollow: not. Claim 7, a claim of no difference, is left out: its bound is "
+    "in the table.")
+
+
+def _has_effects(table) -> bool:
+    return any(v.get("d") is not None and v.get("d_low") is not None for v in table.values)
+
+
+def claim_effects_figure(presets: dict, out: pathlib.Path = FIGURES) -> None:
+    """Draw the power block's figure of every test's effect into `out`, where there is one."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    from mjx_curio import analysis as an
+
+    table = an.power_table(presets)
+    if not _has_effects(table):
+        return
+    n = sum(v.get("d") is not None for v in table.values)
+    fig, ax = plt.subplots(figsize=(8.0, 1.4 + 0.24 * n))
+    an.plot_claim_effects(table, ax)
+    fig.tight_layout()
+    an.save_figure(fig, out, CLAIM_EFFECTS, dpi=DPI)
+    plt.close(fig)
 
 
 @dataclasses.dataclass(frozen=True)
@@ -788,6 +827,7 @@ def write_page(src: pathlib.Path = SNAPSHOTS) -> None:
     presets = load_presets(src)
     new = computed_blocks(presets)
     new["figures"] = figures_block(presets)
+    claim_effects_figure(presets)
     full_length_figure()
     PAGE.write_text(fill(PAGE.read_text(), new))
     CLAIMS_CSV.parent.mkdir(parents=True, exist_ok=True)

@@ -493,6 +493,28 @@ def test_error_without_spread_figure_values(sweep):
     plt.close(fig)
 
 
+
+def test_claim_effects_figure_draws_each_test_where_its_interval_lies():
+    """One row per test with an effect, top to bottom in the table's order: blue on the paper's
+    side, red on the other, grey across 0; filled where Holm's adjustment keeps it."""
+    table = an.Table([], [], [
+        {"key": "1", "test": "a.seeds-0-7 rise", "d": 2.0, "d_low": 1.0, "d_high": 3.0, "p_holm": 0.01},
+        {"key": "5", "test": "share", "d": -2.0, "d_low": -3.0, "d_high": -1.0, "p_holm": 0.2},
+        {"key": "7", "test": "late curiosity", "d": None, "d_low": None, "d_high": None, "p_holm": None},
+        {"key": "11", "test": "UCB > ε", "d": 0.1, "d_low": -0.5, "d_high": 0.7, "p_holm": 1.0},
+    ], "")
+    fig, ax = plt.subplots()
+    an.plot_claim_effects(table, ax)
+    spans, dots = ax.lines[0:6:2], ax.lines[1:6:2]  # each row's interval, then its dot
+    assert [tuple(ln.get_xdata()) for ln in spans] == [(1.0, 3.0), (-3.0, -1.0), (-0.5, 0.7)]
+    assert [ln.get_ydata()[0] for ln in spans] == [2, 1, 0]  # claim 7's row left out
+    assert [ln.get_color() for ln in spans] == [an.EFFECT_COLORS[k] for k in ("paper", "other way", "neither")]
+    assert [ln.get_markerfacecolor() for ln in dots] == [an.EFFECT_COLORS["paper"], "white", "white"]
+    assert [t.get_text() for t in ax.get_yticklabels()] == ["1: a rise", "5: share", "11: UCB > ε"]
+    plt.close(fig)
+    with pytest.raises(ValueError, match="no test with an effect"):
+        an.plot_claim_effects(an.Table([], [], [table.values[2]], ""), plt.subplots()[1])
+
 def test_empty_figure_refused(tmp_path):
     fig, ax = plt.subplots()
     ax.plot([1, 2], [np.nan, np.nan])

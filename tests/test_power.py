@@ -138,6 +138,29 @@ def test_power_table_on_planted_sweeps():
     assert "| objects UCB > ε | 0 | 0, 0 | 0 | n/a | 3 | none: no effect observed | 0 | 0 |" in table.to_markdown()
 
 
+
+def test_standardised_effect_is_the_effect_and_its_interval_over_the_runs_spread():
+    # One sample 1, 2, 3, 4 against 0: mean 2.5, sd sqrt(5/3), se sd / 2, t(0.975, 3) = 3.182446.
+    one = cl.Tested(np.array([1.0, 2.0, 3.0, 4.0, np.nan]))
+    sd = math.sqrt(5 / 3)
+    d, lo, hi = pw.standardised_effect(one)
+    assert (d, lo, hi) == pytest.approx((2.5 / sd, (2.5 - 3.182446 * sd / 2) / sd, (2.5 + 3.182446 * sd / 2) / sd),
+                                        abs=1e-5)
+    # Its interval excludes 0 exactly when the claim's own two-sided test is significant.
+    assert (lo > 0) == (pw.p_value(one) < 0.05)
+    # Two samples, the second's spread three times the first's: sd the root of the mean variance,
+    # interval from Welch's standard error and degrees of freedom, t(0.975, 2.22...) from the tables' rule.
+    two = cl.Tested(np.array([2.0, 3.0, 4.0]), np.array([-3.0, 0.0, 3.0]))
+    w = an.welch_t(two.x, two.y)
+    d, lo, hi = pw.standardised_effect(two)
+    sd = math.sqrt((1.0 + 9.0) / 2)
+    half = an.t_critical(w["df"]) * w["se"]
+    assert (d, lo, hi) == pytest.approx((3.0 / sd, (3.0 - half) / sd, (3.0 + half) / sd))
+    assert (lo > 0) == (w["p"] < 0.05)
+    # No effect to standardise: a blocked claim of no difference, one run, no spread.
+    for t in (cl.Tested(np.ones((3, 3)), blocked=True), cl.Tested(np.array([1.0])), cl.Tested(np.ones(4))):
+        assert all(math.isnan(v) for v in pw.standardised_effect(t)), t
+
 def test_largest_allowed_is_the_one_sided_upper_confidence_bound():
     # One sample 1, 2, 3, 4 against 0: mean 2.5, se sqrt(5/3) / 2, t(0.95, 3) = 2.353363 (tables).
     one = cl.Tested(np.array([1.0, 2.0, 3.0, 4.0, np.nan]))

@@ -454,8 +454,13 @@ def test_page_blocks_on_the_tiny_sweeps(results, tiny_sweeps_dir, tmp_path):
             a, b = cell.split(" (")[0].split(" vs ")
             assert a == b, row
     # Power from the tests with two seeds' values: the two-agent sweep's groups.
-    rows = [r.split(" | ") for r in results.power_block(presets).splitlines()[2:] if r.startswith("| ")]
+    power = results.power_block(presets)
+    rows = [r.split(" | ") for r in power.splitlines()[2:] if r.startswith("| ")]
     assert rows and all(r[7] == "2" for r in rows), rows
+    # Below it, their effects on one axis, drawn where the block links it.
+    assert f"![claim_effects](figures/results/claim_effects.png)" in power
+    results.claim_effects_figure(presets, out=tmp_path / "effects")
+    assert (tmp_path / "effects" / "claim_effects.png").is_file()
 
 
 def test_bad_command_lines_are_messages_not_tracebacks(results, tmp_path, capsys):

@@ -26,6 +26,7 @@ Figure) it is given and returning it:
     plot_action_histogram          figs 10, 12: actions chosen per agent
     plot_reconstructions           figs 7, 13: real views and VAE reconstructions, early vs late
     plot_boltzmann_greediness      how greedy softmax(q / T) is on the runs' states, over T (fig 19's why)
+    plot_claim_effects             every test of the claims on one axis: effect / spread, 95% interval
     plot_view_fractions            what each agent looks at over time (objects, other agent)
     plot_observational             curiosity in windows where an agent only watches the other act
     plot_losses                    the world model's training losses
@@ -88,7 +89,7 @@ action_values, curiosity_parts, self_model and temperatures):
               policy
     power     how many seeds each claim's tests need, the smallest effect they detect and the
               largest the runs do not rule out: `power_table`, and `seeds_needed`, `detectable`,
-              `largest_allowed`, `p_value`, `t_power`, `noncentral_t_sf` behind it
+              `largest_allowed`, `p_value`, `standardised_effect`, `t_power`, `noncentral_t_sf` behind it
     curiosity_parts  claim 1's fall and rise split into the world model's error against the posterior
               mean and the posterior's spread, from sweeps that record the spread:
               `curiosity_parts_table`, `parts_fall_rise`, `curiosity_parts`, `records_spread`,
@@ -180,6 +181,7 @@ from mjx_curio.analysis.significance import (
 from mjx_curio.analysis.figures import (
     AGENT_COLORS,
     CURIOSITY_LABEL,
+    EFFECT_COLORS,
     FIGURES_DIRNAME,
     POLICY_COLORS,
     STEPS_LABEL,
@@ -188,6 +190,7 @@ from mjx_curio.analysis.figures import (
     figures_dir,
     plot_action_histogram,
     plot_boltzmann_greediness,
+    plot_claim_effects,
     plot_cumulative_interactions,
     plot_curiosity,
     plot_curiosity_groups,
@@ -261,6 +264,7 @@ from mjx_curio.analysis.tables import Table, headline_table
 from mjx_curio.analysis.power import (
     detectable,
     largest_allowed,
+    standardised_effect,
     noncentral_t_sf,
     p_value,
     power_table,
@@ -295,7 +299,7 @@ __all__ = [
     # walls
     "WALLS_PAIRS", "walls_measures", "walls_table",
     # power
-    "detectable", "largest_allowed", "noncentral_t_sf", "p_value", "power_table", "seeds_needed", "t_power",
+    "detectable", "largest_allowed", "noncentral_t_sf", "p_value", "power_table", "seeds_needed", "standardised_effect", "t_power",
     # self_model
     "STEP_METRICS", "records_steps", "step_tracking", "tracking_over_time",
     # significance
@@ -314,8 +318,9 @@ __all__ = [
     "reversals_against_shuffled", "rotation_share", "running_action_baseline", "seed_coupling",
     "self_model_tracking", "watching_excess",
     # figures
-    "AGENT_COLORS", "CURIOSITY_LABEL", "FIGURES_DIRNAME", "POLICY_COLORS", "STEPS_LABEL", "TARGET_COLORS",
-    "empty_axes", "figures_dir", "plot_action_histogram", "plot_boltzmann_greediness", "plot_cumulative_interactions",
+    "AGENT_COLORS", "CURIOSITY_LABEL", "EFFECT_COLORS", "FIGURES_DIRNAME", "POLICY_COLORS", "STEPS_LABEL", "TARGET_COLORS",
+    "empty_axes", "figures_dir", "plot_action_histogram", "plot_boltzmann_greediness", "plot_claim_effects",
+    "plot_cumulative_interactions",
     "plot_curiosity", "plot_curiosity_groups", "plot_curiosity_parts", "plot_error_without_spread",
     "plot_interaction_frequency", "plot_losses", "plot_observational",
     "plot_reconstructions", "plot_self_model_tracking", "plot_single_vs_multi", "plot_temperature_measures",

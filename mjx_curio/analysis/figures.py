@@ -3,7 +3,7 @@ Axes (or Figure) it is given and returning it (the list is in the package docstr
 colours and labels they share, and saving figures and text under a sweep's `figures/`
 (`figures_dir`, `save_figure`, `save_text`, `empty_axes`, `slug`). matplotlib is imported only
 where a colour map is needed; imports `sweeps`, `stats`, `recon`, `action_values` and
-`temperatures`.
+`temperatures` (`plot_claim_effects` takes the `power` table it draws).
 """
 
 from __future__ import annotations
@@ -503,6 +503,50 @@ def plot_temperature_measures(sweep: Sweep, axes, paper_range=(0.5, 2.5), late_f
         _finish(ax, heading, "temperature T (log scale)", heading, legend=ax is axes[0] or key in uniform)
     return axes
 
+
+
+EFFECT_COLORS = {"paper": "tab:blue", "other way": "tab:red", "neither": "0.55"}
+
+
+def plot_claim_effects(power, ax):
+    """Every test the claims' verdicts rest on, on one axis: its effect in units of the spread
+    across runs (`power.standardised_effect`, the paper's direction to the right) with its 95%
+    interval, one row per test in the claims' order, labelled with the claim and the test. Blue:
+    the interval lies on the paper's side of 0; red: on the other side; grey: it spans 0. Filled:
+    significant after Holm's adjustment over all the tests; hollow: not. `power` is the
+    `power_table` (its `values`); claim 7's claim of no difference has no such effect and is left
+    out."""
+    rows = [v for v in power.values if v.get("d") is not None and v.get("d_low") is not None]
+    if not rows:
+        raise ValueError("no test with an effect to draw")
+    y = np.arange(len(rows))[::-1]
+    for yi, v in zip(y, rows):
+        side = "paper" if v["d_low"] > 0 else "other way" if v["d_high"] < 0 else "neither"
+        color = EFFECT_COLORS[side]
+        ax.plot([v["d_low"], v["d_high"]], [yi, yi], color=color, lw=1.6)
+        held = v.get("p_holm") is not None and v["p_holm"] < 0.05
+        ax.plot(v["d"], yi, "o", ms=5, color=color, mfc=color if held else "white")
+    ax.axvline(0.0, color="0.2", lw=0.8)
+    ax.set_yticks(y)
+    ax.set_yticklabels([f"{v['key']}: {_short_test(v['test'])}" for v in rows], fontsize=6.5)
+    ax.set_ylim(-0.7, len(rows) - 0.3)
+    for side, color in EFFECT_COLORS.items():
+        label = {"paper": "95% interval on the paper's side", "other way": "on the other side",
+                 "neither": "spans 0"}[side]
+        ax.plot([], [], color=color, lw=1.6, label=label)
+    ax.plot([], [], "o", ms=5, color="0.3", label="significant after Holm")
+    ax.plot([], [], "o", ms=5, color="0.3", mfc="white", label="not after Holm")
+    _finish(ax, "The claims' tests: effect / spread across runs, 95% interval",
+            "effect / sd across runs (the paper's direction > 0)", "", legend=False)
+    ax.legend(fontsize=7, loc="upper center", bbox_to_anchor=(0.5, -0.07), ncol=3, frameon=False)
+    ax.grid(True, axis="x", alpha=0.3)
+    ax.grid(False, axis="y")
+    return ax
+
+
+def _short_test(label: str) -> str:
+    """A test's label without the seed range of a merged sweep's name ('multi_agent.seeds-0-7 ...')."""
+    return re.sub(r"\.seeds-\d+-\d+", "", label)
 
 # ---------------------------------------------------------------------------------- saving
 

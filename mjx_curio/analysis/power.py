@@ -190,6 +190,27 @@ def p_value(tested: Tested) -> float:
     return t_pvalue(d / se, df)
 
 
+def standardised_effect(tested: Tested, alpha: float = ALPHA) -> tuple[float, float, float]:
+    """(d, low, high): the effect in units of the spread across runs (Cohen's d, the paper's
+    direction positive) and its two-sided (1 - `alpha`) interval, (effect -+ t x se) / sd, where sd
+    is the runs' standard deviation (two samples: the root of the mean of the two variances) and
+    se and t the test's own (Student's t of one sample, Welch's of two). A common axis for tests
+    of different measures; NaN for a blocked claim of no difference and where there is no spread."""
+    if tested.blocked:
+        return math.nan, math.nan, math.nan
+    if tested.y is None:
+        se, df = _one_sample(tested)
+        sd = math.sqrt(_var(tested.x))
+    else:
+        w = welch_t(tested.x, tested.y)
+        se, df = w["se"], w["df"]
+        sd = math.sqrt((_var(tested.x) + _var(tested.y)) / 2.0)
+    if not (math.isfinite(se) and math.isfinite(df) and sd > 0):
+        return math.nan, math.nan, math.nan
+    d, half = effect(tested), t_critical(df, alpha) * se
+    return d / sd, (d - half) / sd, (d + half) / sd
+
+
 def _one_sample(tested: Tested) -> tuple[float, float]:
     """(standard error, degrees of freedom) of a one-sample test's mean over the runs it has;
     NaN below 2 runs."""
@@ -218,7 +239,10 @@ def power_table(sweeps) -> Table:
             bound = largest_allowed(t)
             rows.append([r.key, r.verdict.split(":")[0].split(" (")[0], label, _g(d), sd, _g(bound), "", str(now),
                          _seeds(t, d, need), _g(mde_now), _g(mde_planned)])
-            values.append({"key": r.key, "test": label, "effect": _num(d), "largest_allowed": _num(bound),
+            std = standardised_effect(t)
+            values.append({"key": r.key, "verdict": rows[-1][1], "test": label, "effect": _num(d),
+                           "d": _num(std[0]), "d_low": _num(std[1]), "d_high": _num(std[2]),
+                           "largest_allowed": _num(bound),
                            "p": _num(p_value(t)), "seeds": now, "seeds_needed": _num(need),
                            "detectable_now": _num(mde_now), "detectable_planned": _num(mde_planned)})
     adjusted = holm([math.nan if v["p"] is None else v["p"] for v in values])
