@@ -604,6 +604,17 @@ def test_observational_curiosity_on_planted_windows():
     d = cl.watching_excess(s)
     assert d["diff"] == pytest.approx(np.full(3, 0.05), abs=0.01)
     assert cl.claim_observational_curiosity({"multi_agent": s}).verdict.startswith("holds")
+    # A static object filling the view adds to the curiosity too. Where it fills more of it while
+    # watching, the raw difference takes that for watching; with the view's fill held fixed it does not.
+    fill = 0.4 * rng.random(shape) + 0.3 * sees_other
+    s.metrics["view_fraction"][..., 0] = fill  # the pyramid: never moves
+    s.metrics["view_fraction"][..., -1] = np.where(sees_other, 0.001, 0.0)  # the other agent, a speck
+    s.metrics["curiosity"] += 0.1 * fill
+    d = cl.watching_excess(s)
+    assert d["diff"] == pytest.approx(np.full(3, 0.05 + 0.1 * 0.3), abs=0.01)
+    assert d["beyond_view"] == pytest.approx(np.full(3, 0.05), abs=0.005)
+    s.metrics["view_fraction"][..., 0] = 0.0
+    s.metrics["curiosity"] -= 0.1 * fill
     # A moving object in view counts as watching too; one the agent touched itself does not.
     s.metrics["view_fraction"][..., -1] = 0.0
     s.metrics["view_fraction"][..., 2] = 0.1  # the sphere always in view ...

@@ -118,6 +118,7 @@ from mjx_curio.analysis.claims import (
     agent_curiosity_coupling,
     assign_presets,
     balanced_rotation_share,
+    beyond_view,
     claim_agents_move_together,
     claim_boltzmann_least_curious,
     claim_boltzmann_trembles,
@@ -307,7 +308,7 @@ __all__ = [
     "t_critical", "t_pvalue", "tost_bound", "welch_t",
     # claims
     "CLAIMS", "ClaimResult", "Tested", "VERDICTS", "action_shares", "agent_curiosity_coupling", "assign_presets",
-    "balanced_rotation_share", "claim_agents_move_together", "claim_boltzmann_trembles",
+    "balanced_rotation_share", "beyond_view", "claim_agents_move_together", "claim_boltzmann_trembles",
     "claim_contact_ranking", "claim_curiosity_dip_and_rise", "claim_observational_curiosity",
     "claim_boltzmann_least_curious", "claim_prefers_moving_objects", "claim_rotations_less", "claim_self_model_predicts",
     "claim_stop_least",

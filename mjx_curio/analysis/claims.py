@@ -917,6 +917,8 @@ def claim_observational_curiosity(presets: Mapping[str, Sweep]) -> ClaimResult:
     hold; window 0 is left out). Curiosity is taken relative to the agent's trailing moving average
     of 50 windows (as in `stats.observation_classes`), which removes the slow learning trend.
     Per run: mean excess while watching - mean excess while quiet (windows of both agents pooled).
+    Reported alongside, not the verdict: the same with the share of the view that the objects and
+    the other agent fill held fixed (`beyond_view`), since something in view also fills the view.
     Verdict: holds if the 95% CI across runs lies above 0. Scale: runs of >= 10,000 steps (past the
     initial fall), >= MIN_SEEDS runs with windows of both kinds.
     """
@@ -926,13 +928,15 @@ def claim_observational_curiosity(presets: Mapping[str, Sweep]) -> ClaimResult:
     if s is None:
         return ClaimResult(key, claim, evidence, "n/a", _missing(("multi_agent",), presets))
     d = watching_excess(s)
-    w, q, diff = mean_ci(d["watching"]), mean_ci(d["quiet"]), mean_ci(d["diff"])
+    w, q, diff, b = mean_ci(d["watching"]), mean_ci(d["quiet"]), mean_ci(d["diff"]), mean_ci(d["beyond_view"])
     n = int(np.isfinite(d["diff"]).sum())
     values = {"watching": _num(w[0]), "quiet": _num(q[0]), "diff": _num(diff[0]), "diff low": _num(diff[1]),
-              "runs": n, "watching windows": int(d["n_watching"]), "quiet windows": int(d["n_quiet"])}
+              "runs": n, "watching windows": int(d["n_watching"]), "quiet windows": int(d["n_quiet"]),
+              "beyond view": _num(b[0]), "beyond view low": _num(b[1])}
     stat = (f"{s.name}, runs: {n}: curiosity above the agent's moving average, own contact excluded, while the other "
             f"agent or a moving object is in view {_ci(w)} ({d['n_watching']:,} windows), while neither is "
-            f"{_ci(q)} ({d['n_quiet']:,} windows); difference {_ci(diff)}")
+            f"{_ci(q)} ({d['n_quiet']:,} windows); difference {_ci(diff)}; with the view's fill held fixed "
+            f"(context, not the verdict) {_ci(b)}")
     gap = _scale_gap(s, 10_000, {"runs with both kinds of window": n})
     fails = [] if diff[1] > 0 else ["watching does not raise curiosity significantly"]
     tests = {"excess watching - quiet": Tested(d["diff"], runs_per_seed=len(s.groups()))}
@@ -941,7 +945,8 @@ def claim_observational_curiosity(presets: Mapping[str, Sweep]) -> ClaimResult:
 
 
 def watching_excess(sweep: Sweep, window: int = SMOOTH, moved_m: float = 0.01) -> dict:
-    """Per run: {"watching", "quiet", "diff"} mean excess curiosity (arrays [runs]) and the window
+    """Per run: {"watching", "quiet", "diff"} mean excess curiosity, "beyond_view" the watching
+    coefficient with the view's fill held fixed (`beyond_view`) (arrays [runs]), and the window
     counts {"n_watching", "n_quiet"}, as `claim_observational_curiosity` defines them."""
     if sweep.n_agents != 2:
         raise ValueError(f"{sweep.path} has {sweep.n_agents} agent(s): watching another agent needs two")
@@ -960,8 +965,8 @@ def watching_excess(sweep: Sweep, window: int = SMOOTH, moved_m: float = 0.01) -
     excess = cur - moving_average(cur, window, axis=1)
     w = _nanmean(np.where(watching, excess, np.nan), axis=(1, 2))
     q = _nanmean(np.where(quiet, excess, np.nan), axis=(1, 2))
-    return {"watching": w, "quiet": q, "diff": w - q, "n_watching": int(watching.sum()), "n_quiet": int(quiet.sum())}
-
+    return {"watching": w, "quiet": q, "diff": w - q, "beyond_view": beyond_view(excess, watching, quiet, view),
+            "n_watching": int(watching.sum()), "n_quiet": int(quiet.sum())}
 
 
 def claim_contacts_raise_curiosity(presets: Mapping[str, Sweep]) -> ClaimResult:
@@ -976,9 +981,9 @@ def claim_contacts_raise_curiosity(presets: Mapping[str, Sweep]) -> ClaimResult:
     the other agent); window 0 is left out. Per run: mean excess while touching - mean excess
     while apart (the agents' windows pooled), NaN for a run with fewer than 5 touching windows.
     Reported alongside, not the verdict: the same difference with the share of the view that the
-    objects and the other agent fill held fixed (per run, the touching coefficient of a least-squares
-    fit of the excess on touching, that share and its square), since a touching agent faces an object
-    close up and a view full of objects may surprise by itself. Groups: single_agent ε-greedy (fig. 9's run) and multi_agent UCB (section 4.1.2's), those
+    objects and the other agent fill held fixed (`beyond_view`: per run, the touching coefficient of
+    a least-squares fit of the excess on touching, that share and its square), since a touching
+    agent faces an object close up and a view full of objects may surprise by itself. Groups: single_agent ε-greedy (fig. 9's run) and multi_agent UCB (section 4.1.2's), those
     loaded. Verdict: holds if in every group the 95% CI across runs lies above 0. Context, not the
     verdict: the other policies of both sweeps. Scale: runs of >= 10,000 steps (past the initial
     fall), >= MIN_SEEDS runs with touching windows a group.
@@ -1035,15 +1040,27 @@ def contact_excess(sweep: Sweep, group: Group, window: int = SMOOTH, min_windows
     a = _nanmean(np.where(apart, excess, np.nan), axis=(1, 2))
     enough = touching.sum(axis=(1, 2)) >= min_windows
     t = np.where(enough, t, np.nan)
-    fill = np.nan_to_num(m["view_fraction"][group.indices].astype(float)).sum(axis=3)  # [n, W, A]
-    beyond = np.full(len(group.indices), np.nan)
-    for r in np.flatnonzero(enough):  # one small least-squares fit a run
-        ok = (touching[r] | apart[r]) & np.isfinite(excess[r])
-        v = fill[r][ok]
-        x = np.stack([np.ones_like(v), touching[r][ok].astype(float), v, v * v], axis=1)
-        beyond[r] = np.linalg.lstsq(x, excess[r][ok], rcond=None)[0][1]
+    beyond = np.where(enough, beyond_view(excess, touching, apart, m["view_fraction"][group.indices]), np.nan)
     return {"touching": t, "apart": a, "diff": t - a, "beyond_view": beyond, "n_touching": int(touching.sum()),
             "n_apart": int(apart.sum())}
+
+
+def beyond_view(excess, marked, rest, view_fraction) -> np.ndarray:
+    """[runs]: per run, the coefficient of `marked` in a least-squares fit of `excess` on marked,
+    the view's fill (the share of the view the objects and the other agent fill, summed from
+    `view_fraction` [runs, windows, agents, targets]) and its square, over the windows `marked` or
+    `rest` (the agents' windows pooled): `marked` windows' excess over `rest`'s with the fill held
+    fixed. NaN for a run without windows of both kinds."""
+    fill = np.nan_to_num(np.asarray(view_fraction, float)).sum(axis=3)
+    out = np.full(excess.shape[0], np.nan)
+    for r in range(excess.shape[0]):  # one small fit a run
+        ok = (marked[r] | rest[r]) & np.isfinite(excess[r])
+        if not (marked[r] & ok).any() or not (rest[r] & ok).any():
+            continue
+        v = fill[r][ok]
+        x = np.stack([np.ones_like(v), marked[r][ok].astype(float), v, v * v], axis=1)
+        out[r] = np.linalg.lstsq(x, excess[r][ok], rcond=None)[0][1]
+    return out
 
 
 CONTACT_ONSET = 25_000  # fig. 9: "around 25 000 training steps ... the agent begins to interact frequently"
