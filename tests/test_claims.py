@@ -1,4 +1,4 @@
-"""The claims table (mjx_curio/analysis/claims.py): each claim's verdict on synthetic sweeps with
+"""The claims table (mjx_curio/analysis/claims/): each claim's verdict on synthetic sweeps with
 a planted effect (and without it), and the whole table on the session's tiny sweeps. The tests
 the claims use are checked in test_significance.py."""
 
@@ -694,9 +694,9 @@ def test_a_side_experiment_keeps_its_own_key_and_claim_6b_reads_it_for_the_order
     del main.metrics["rotation_reversals"]
     side = fake_sweep("multi_agent.order", 2, POLICIES, 1000, preset="multi_agent")
     more = fake_sweep("multi_agent.order.seeds-3-5", 2, POLICIES, 1000, preset="multi_agent", first_seed=3)
-    assert cl.side_experiment("multi_agent.order.seeds-3-5") == "multi_agent.order"
-    assert cl.side_experiment("multi_agent.seeds-3-5") is None and cl.side_experiment("multi_agent") is None
-    assert cl.side_experiment("nothing.order") is None
+    assert an.side_experiment("multi_agent.order.seeds-3-5") == "multi_agent.order"
+    assert an.side_experiment("multi_agent.seeds-3-5") is None and an.side_experiment("multi_agent") is None
+    assert an.side_experiment("nothing.order") is None
     got = cl.assign_presets([side, main])
     assert list(got) == ["multi_agent", "multi_agent.order"]
     # Each beside its preset, whatever the order given; one without its preset loaded at the end.
@@ -918,7 +918,7 @@ def test_contacts_raise_curiosity_on_planted_windows():
         touching = rng.random(shape) < 0.1
         s.metrics["contact_object"][..., 1] = np.where(touching, 3, 0)  # the cylinder, 3 steps of the window
         s.metrics["curiosity"][:] = 0.5 + 0.01 * rng.normal(size=shape) + 0.04 * touching
-    g = cl._paper_group(single, "eps")
+    g = cl.paper_group(single, "eps")
     d = cl.contact_excess(single, g)
     assert d["diff"] == pytest.approx(np.full(3, 0.04), abs=0.01)
     assert d["n_touching"] + d["n_apart"] == 3 * 599  # window 0 left out
@@ -938,7 +938,7 @@ def test_contacts_raise_curiosity_on_planted_windows():
     single.metrics["curiosity"] += 0.03 * (single.metrics["contact_object"][..., 1] > 0)
     assert cl.contact_excess(single, g)["beyond_view"] == pytest.approx(np.full(3, 0.03), abs=0.002)
     # Windows where the agent touched only the other agent are neither touching nor apart.
-    ucb = cl._paper_group(multi, "ucb")
+    ucb = cl.paper_group(multi, "ucb")
     before = cl.contact_excess(multi, ucb)
     multi.metrics["contact_agent"][:, 1] = 1
     after = cl.contact_excess(multi, ucb)
@@ -957,7 +957,7 @@ def test_contacts_raise_curiosity_on_planted_windows():
 
 def test_contacts_begin_late_on_planted_rates():
     single = fake_sweep("single_agent", 1, POLICIES, 2000, seeds=3)  # 40,000 steps
-    g = cl._paper_group(single, "eps")
+    g = cl.paper_group(single, "eps")
     # 1 contact step a window (50 per 1,000 steps) before step 25,000, 4 or 5 from then on.
     onset = 25_000 // 20
     for k, r in enumerate(g.indices):

@@ -458,7 +458,7 @@ def test_page_blocks_on_the_tiny_sweeps(results, tiny_sweeps_dir, tmp_path):
     rows = [r.split(" | ") for r in power.splitlines()[2:] if r.startswith("| ")]
     assert rows and all(r[7] == "2" for r in rows), rows
     # Below it, their effects on one axis, drawn where the block links it.
-    assert f"![claim_effects](figures/results/claim_effects.png)" in power
+    assert "![claim_effects](figures/results/claim_effects.png)" in power
     results.claim_effects_figure(presets, out=tmp_path / "effects")
     assert (tmp_path / "effects" / "claim_effects.png").is_file()
 

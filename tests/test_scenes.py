@@ -256,6 +256,11 @@ def test_package_data_ships_every_scene_file():
     tool = tomllib.loads((root / "pyproject.toml").read_text())["tool"]["setuptools"]
     assert tool["package-dir"]["mjx_curio.scenes"] == "scenes"
     assert {"mjx_curio", "mjx_curio.scenes"} <= set(tool["packages"])
+    # Every Python package of the source ships: a wheel lists them, where an editable install
+    # would find a forgotten one anyway.
+    code = {".".join(("mjx_curio",) + i.parent.relative_to(root / "mjx_curio").parts)
+            for i in (root / "mjx_curio").rglob("__init__.py")}
+    assert code <= set(tool["packages"]), sorted(code - set(tool["packages"]))
     assert (SCENES / "__init__.py").exists()  # a regular package, found by importlib.resources
     shipped = set()
     for package, patterns in tool["package-data"].items():

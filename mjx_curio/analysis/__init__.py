@@ -83,7 +83,9 @@ action_values, curiosity_parts, self_model and temperatures):
               window moments sweeps record, pooled within windows (`step_tracking`,
               `tracking_over_time`, `records_steps`, `STEP_METRICS`)
     claims    the paper's claims tested across seeds: `claims_table` (one row per claim: statistic,
-              95% CI or p-value, verdict), a `claim_*` function per claim, and `assign_presets`
+              95% CI or p-value, verdict), a `claim_*` function per claim, and `assign_presets`;
+              a package, the claims by subject (`curiosity`, `behaviour`, `surprise`) on what
+              they share (`common`)
     temperatures  what a Boltzmann sweep's temperatures change, run by run: `temperature_table`
               and the `temperature_measures` behind it; `policy_measures_table`, the same per
               policy

@@ -27,7 +27,8 @@ import math
 
 import numpy as np
 
-from mjx_curio.analysis.claims import ALPHA, Tested, _num, claim_results
+from mjx_curio.analysis.claims import ALPHA, Tested, claim_results
+from mjx_curio.analysis.claims.common import _num
 from mjx_curio.analysis.significance import (
     block_anova,
     equivalence_bound,

@@ -4,7 +4,7 @@ adjustment for many tests, Pearson's r and Fisher's z.
 
 The tails come from the regularised incomplete beta function (`betainc`, a continued fraction),
 so the analysis needs no SciPy; the tests check them against closed forms and hand computations.
-The claims (`claims.py`), the power of their tests (`power.py`) and the
+The claims (`claims/`), the power of their tests (`power.py`) and the
 measure-by-measure tables (`temperatures.py`, `walls.py`) use them. Imports nothing of the package.
 """
 
