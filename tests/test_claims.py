@@ -955,6 +955,36 @@ def test_contacts_raise_curiosity_on_planted_windows():
     assert cl.claim_contacts_raise_curiosity({"single_agent": single}).verdict.startswith("not testable at this scale")
 
 
+
+def test_touching_parts_split_claim_12_into_error_and_spread():
+    # Planted: touching raises the world model's error by 0.03 and the spread by 0.02; a full view
+    # (half the touching windows' fill is the object) raises the error by 0.1 per unit of fill more.
+    # Raw, the error's part takes the fill's share; held fixed, it is the touch's own 0.03.
+    rng = np.random.default_rng(13)
+    s = fake_sweep("single_agent.spread", 1, [("eps", 0.2)], 600, seeds=4)
+    mean_latent = fake_sweep("single_agent.z_mean", 1, [("eps", 0.2)], 600, seeds=4, z="mean")
+    shape = s.metrics["curiosity"].shape
+    touching = rng.random(shape) < 0.1
+    s.metrics["contact_object"][..., 3] = np.where(touching, 2, 0)  # the disc
+    fill = 0.5 * rng.random(shape) + 0.3 * touching
+    s.metrics["view_fraction"][..., 3] = fill
+    spread = 0.4 + 0.02 * touching + 0.002 * rng.normal(size=shape)
+    error = 0.1 + 0.03 * touching + 0.1 * fill + 0.002 * rng.normal(size=shape)
+    s.metrics["curiosity_spread"][:] = spread
+    s.metrics["curiosity"][:] = spread + error
+    t = an.touching_parts_table({"single_agent.spread": s, "single_agent.z_mean": mean_latent})
+    rows = {v["part"]: v for v in t.values}
+    assert list(rows) == list(an.PARTS) and {v["sweep"] for v in t.values} == {"single_agent.spread"}
+    assert rows["spread"]["diff"] == pytest.approx(0.02, abs=0.003)
+    assert rows["error"]["diff"] == pytest.approx(0.03 + 0.1 * 0.3, abs=0.005)
+    assert rows["curiosity"]["diff"] == pytest.approx(rows["spread"]["diff"] + rows["error"]["diff"], abs=1e-6)
+    assert rows["error"]["beyond_view"] == pytest.approx(0.03, abs=0.003)
+    assert rows["spread"]["beyond_view"] == pytest.approx(0.02, abs=0.003)
+    assert t.rows[0][:5] == ["`single_agent.spread`", "ε-greedy (ε=0.2)", "4", f"{int(touching[:, 1:].sum()):,}",
+                             "curiosity obtained"]
+    # No sweep that records the spread with sampled latents: no rows.
+    assert an.touching_parts_table({"single_agent.z_mean": mean_latent}).rows == []
+
 def test_contacts_begin_late_on_planted_rates():
     single = fake_sweep("single_agent", 1, POLICIES, 2000, seeds=3)  # 40,000 steps
     g = cl.paper_group(single, "eps")

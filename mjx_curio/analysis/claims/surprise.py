@@ -251,17 +251,19 @@ def claim_contacts_raise_curiosity(presets: Mapping[str, Sweep]) -> ClaimResult:
                        tests)
 
 
-def contact_excess(sweep: Sweep, group: Group, window: int = SMOOTH, min_windows: int = 5) -> dict:
+def contact_excess(sweep: Sweep, group: Group, window: int = SMOOTH, min_windows: int = 5, series=None) -> dict:
     """Per run of `group`: {"touching", "apart", "diff"} mean excess curiosity, "beyond_view" the
     touching coefficient with the view's fill held fixed (arrays [runs]), and the window counts
-    {"n_touching", "n_apart"}, as `claim_contacts_raise_curiosity` defines them."""
+    {"n_touching", "n_apart"}, as `claim_contacts_raise_curiosity` defines them. `series`
+    [group's runs, windows, agents]: another per-agent series in place of the curiosity (a part of
+    it, `curiosity_parts.touching_parts_table`)."""
     m = sweep.metrics
     touching = m["contact_object"][group.indices].sum(axis=3) > 0  # [n, W, A]
     other = m["contact_agent"][group.indices] > 0
     valid = np.zeros(touching.shape, bool)
     valid[:, 1:] = True
     touching, apart = valid & touching, valid & ~touching & ~other
-    cur = m["curiosity"][group.indices].astype(float)
+    cur = np.asarray(m["curiosity"][group.indices] if series is None else series, float)
     excess = cur - moving_average(cur, window, axis=1)
     t = _nanmean(np.where(touching, excess, np.nan), axis=(1, 2))
     a = _nanmean(np.where(apart, excess, np.nan), axis=(1, 2))
