@@ -199,15 +199,16 @@ def curiosity_parts_block(presets: dict, dims: pathlib.Path = POSTERIOR_DIMS) ->
     """Claim 1's fall and rise split into error and spread (`analysis.curiosity_parts_table`),
     from the sweeps that record the spread, claim 3 split the same way wherever one agent and two
     ran the same policy (`analysis.agents_parts_table`), and claims 10 and 11 wherever two policies
-    ran with the same agents (`analysis.policies_parts_table`), and claim 12, touching an object
-    (`analysis.touching_parts_table`); then, from posterior_dims.json, each
+    ran with the same agents (`analysis.policies_parts_table`), and claims 9 and 12, watching and
+    touching (`analysis.situation_parts_table`); then, from posterior_dims.json, each
     sweep's spread and latent dimensions near the prior checkpoint by checkpoint
     (`posterior_dims_table`)."""
     from mjx_curio import analysis as an
 
     table = an.curiosity_parts_table(presets)
     parts = [table.to_markdown() if table.rows else "No sweep that records the posterior spread has been snapshotted yet.\n"]
-    for table in (an.agents_parts_table(presets), an.policies_parts_table(presets), an.touching_parts_table(presets)):
+    for table in (an.agents_parts_table(presets), an.policies_parts_table(presets),
+                  an.situation_parts_table(presets)):
         if table.rows:
             parts.append(table.to_markdown())
     if dims.exists():

@@ -956,7 +956,7 @@ def test_contacts_raise_curiosity_on_planted_windows():
 
 
 
-def test_touching_parts_split_claim_12_into_error_and_spread():
+def test_situation_parts_split_claims_9_and_12_into_error_and_spread():
     # Planted: touching raises the world model's error by 0.03 and the spread by 0.02; a full view
     # (half the touching windows' fill is the object) raises the error by 0.1 per unit of fill more.
     # Raw, the error's part takes the fill's share; held fixed, it is the touch's own 0.03.
@@ -972,18 +972,32 @@ def test_touching_parts_split_claim_12_into_error_and_spread():
     error = 0.1 + 0.03 * touching + 0.1 * fill + 0.002 * rng.normal(size=shape)
     s.metrics["curiosity_spread"][:] = spread
     s.metrics["curiosity"][:] = spread + error
-    t = an.touching_parts_table({"single_agent.spread": s, "single_agent.z_mean": mean_latent})
+    t = an.situation_parts_table({"single_agent.spread": s, "single_agent.z_mean": mean_latent})
     rows = {v["part"]: v for v in t.values}
-    assert list(rows) == list(an.PARTS) and {v["sweep"] for v in t.values} == {"single_agent.spread"}
+    assert list(rows) == list(an.PARTS)
+    assert {(v["sweep"], v["claim"]) for v in t.values} == {("single_agent.spread", "12")}
     assert rows["spread"]["diff"] == pytest.approx(0.02, abs=0.003)
     assert rows["error"]["diff"] == pytest.approx(0.03 + 0.1 * 0.3, abs=0.005)
     assert rows["curiosity"]["diff"] == pytest.approx(rows["spread"]["diff"] + rows["error"]["diff"], abs=1e-6)
     assert rows["error"]["beyond_view"] == pytest.approx(0.03, abs=0.003)
     assert rows["spread"]["beyond_view"] == pytest.approx(0.02, abs=0.003)
-    assert t.rows[0][:5] == ["`single_agent.spread`", "ε-greedy (ε=0.2)", "4", f"{int(touching[:, 1:].sum()):,}",
+    assert t.rows[0][:5] == ["`single_agent.spread`", "ε-greedy (ε=0.2)", "12: touching an object", "4",
                              "curiosity obtained"]
+    # Two agents: claim 9 too, per group. Planted: watching the other agent raises the spread alone.
+    two = fake_sweep("multi_agent.spread", 2, [("eps", 0.2), ("ucb", 1.0)], 600, seeds=3)
+    shape = two.metrics["curiosity"].shape
+    sees = rng.random(shape) < 0.3
+    two.metrics["view_fraction"][..., -1] = np.where(sees, 0.1, 0.0)
+    two.metrics["curiosity_spread"][:] = 0.4 + 0.03 * sees + 0.002 * rng.normal(size=shape)
+    two.metrics["curiosity"][:] = two.metrics["curiosity_spread"] + 0.1 + 0.002 * rng.normal(size=shape)
+    t = an.situation_parts_table({"multi_agent.spread": two})
+    watched = {(v["group"], v["part"]): v for v in t.values if v["claim"] == "9"}
+    assert len(watched) == 6 and {v["claim"] for v in t.values} == {"9", "12"}
+    for group in ("ε-greedy (ε=0.2)", "UCB (c=1)"):
+        assert watched[group, "spread"]["diff"] == pytest.approx(0.03, abs=0.003)
+        assert watched[group, "error"]["diff"] == pytest.approx(0.0, abs=0.003)
     # No sweep that records the spread with sampled latents: no rows.
-    assert an.touching_parts_table({"single_agent.z_mean": mean_latent}).rows == []
+    assert an.situation_parts_table({"single_agent.z_mean": mean_latent}).rows == []
 
 def test_contacts_begin_late_on_planted_rates():
     single = fake_sweep("single_agent", 1, POLICIES, 2000, seeds=3)  # 40,000 steps

@@ -97,8 +97,8 @@ action_values, curiosity_parts, self_model and temperatures):
               `curiosity_parts_table`, `parts_fall_rise`, `curiosity_parts`, `records_spread`,
               `samples_latent` (z=sample; under z=mean the curiosity is all error); claim 3 (one
               agent against two) part by part: `agents_parts_table`; claims 10 and 11 (one
-              policy against another): `policies_parts_table`; and claim 12 (touching an object):
-              `touching_parts_table`
+              policy against another): `policies_parts_table`; and claims 9 and 12 (watching
+              something move, touching an object): `situation_parts_table`
     walls     what a different texture on every wall changes: `walls_table` (each walls-different
               preset against its identical-walls preset, per policy) and `walls_measures`
     figures   every `plot_*` function, the colours and labels they share, and saving
@@ -166,7 +166,7 @@ from mjx_curio.analysis.curiosity_parts import (
     policies_parts_table,
     records_spread,
     samples_latent,
-    touching_parts_table,
+    situation_parts_table,
 )
 from mjx_curio.analysis.self_model import STEP_METRICS, records_steps, step_tracking, tracking_over_time
 from mjx_curio.analysis.significance import (
@@ -296,7 +296,7 @@ __all__ = [
     # curiosity_parts
     "MEAN_LATENT_PART", "PARTS", "POLICY_PAIRS", "agents_parts_table", "curiosity_parts", "curiosity_parts_table",
     "parts_fall_rise", "policies_parts_table",
-    "records_spread", "samples_latent", "touching_parts_table",
+    "records_spread", "samples_latent", "situation_parts_table",
     # tables
     "Table", "headline_table",
     # temperatures

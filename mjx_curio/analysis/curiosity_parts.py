@@ -12,8 +12,8 @@ spread's, the world model is not growing more surprised; its VAE is growing less
 The same split reads claim 3 (two agents more curious than one) part by part: a second agent may
 raise the world model's error, which its moves make harder to foresee, while the curiosity as a
 whole does not move (`agents_parts_table`); claims 10 and 11, the policies' curiosity, part
-by part (`policies_parts_table`); and claim 12, the curiosity of an agent touching an object
-(`touching_parts_table`).
+by part (`policies_parts_table`); and claims 9 and 12, the curiosity of an agent watching something
+move and of one touching an object (`situation_parts_table`).
 """
 
 from __future__ import annotations
@@ -23,7 +23,7 @@ from typing import Mapping
 
 import numpy as np
 
-from mjx_curio.analysis.claims import block_mean, contact_excess, fall_rise
+from mjx_curio.analysis.claims import block_mean, contact_excess, fall_rise, watching_excess
 from mjx_curio.analysis.significance import welch_t
 from mjx_curio.analysis.stats import mean_ci
 from mjx_curio.analysis.sweeps import Group, Sweep
@@ -181,33 +181,50 @@ def policies_parts_table(presets: Mapping[str, Sweep]) -> Table:
     return Table(cols, rows, values, note if rows else "")
 
 
-def touching_parts_table(presets: Mapping[str, Sweep]) -> Table:
-    """Claim 12 part by part: per sweep that records the spread with sampled latents (z=sample)
-    and per group of it, for each part (`PARTS`, per agent: the curiosity, the spread, and the
-    curiosity minus the spread), claim 12's measure (`claims.contact_excess`): the part's excess
-    over the agent's moving average while it touches an object minus while it touches nothing,
+# The situations of claims 12 and 9, as `situation_parts_table` names them.
+SITUATIONS = {"12": "12: touching an object", "9": "9: watching something move"}
+
+
+def situation_parts_table(presets: Mapping[str, Sweep]) -> Table:
+    """Claims 9 and 12 part by part: per sweep that records the spread with sampled latents
+    (z=sample) and per group of it, for each part (`PARTS`, per agent: the curiosity, the spread,
+    and the curiosity minus the spread), the claim's own measure: its excess over the agent's
+    moving average while it touches an object minus while it touches nothing (claim 12,
+    `claims.contact_excess`), and, with two agents, while the other agent or a moving object is in
+    view minus while neither is, with no contact of its own (claim 9, `claims.watching_excess`);
     mean over runs [95 % CI], raw and with the view's fill held fixed (`claims.beyond_view`)."""
-    cols = ["sweep", "group", "runs", "touching windows", "part", "touching - apart", "the view's fill held fixed"]
+    cols = ["sweep", "group", "claim", "runs", "part", "in the situation - out of it", "the view's fill held fixed"]
     rows, values = [], []
     for name, s in presets.items():
         if not (records_spread(s) and samples_latent(s)):
             continue
+        c = s.metrics["curiosity"].astype(float)
+        spread = s.metrics[SPREAD].astype(float)
+        series = {"curiosity": c, "spread": spread, "error": c - spread}
         for g in s.groups():
-            c = s.metrics["curiosity"][g.indices].astype(float)
-            spread = s.metrics[SPREAD][g.indices].astype(float)
-            for part, series in (("curiosity", c), ("spread", spread), ("error", c - spread)):
-                d = contact_excess(s, g, series=series)
-                raw, fixed = mean_ci(d["diff"]), mean_ci(d["beyond_view"])
-                rows.append([f"`{name}`", g.label, str(int(np.isfinite(d["diff"]).sum())), f"{d['n_touching']:,}",
-                             PARTS[part], _ci(raw), _ci(fixed)])
-                values.append({"sweep": name, "group": g.label, "part": part, "diff": float(raw[0]),
-                               "diff_low": float(raw[1]), "diff_high": float(raw[2]), "beyond_view": float(fixed[0]),
-                               "beyond_view_low": float(fixed[1]), "beyond_view_high": float(fixed[2])})
-    note = ("Claim 12 part by part: each part's excess over the agent's moving average of 50 windows while it touches "
-            "an object minus while it touches nothing (runs with at least 5 touching windows), and the same with the "
-            "share of the view that the objects and the other agent fill held fixed (per run, least squares on "
-            "touching, that share and its square); mean over runs [95 % CI].")
+            for claim in ("12", "9") if s.n_agents == 2 else ("12",):
+                for part, x in series.items():
+                    if claim == "12":
+                        d = contact_excess(s, g, series=x[g.indices])
+                        diff, fixed = d["diff"], d["beyond_view"]
+                    else:
+                        d = watching_excess(s, series=x)
+                        diff, fixed = d["diff"][g.indices], d["beyond_view"][g.indices]
+                    raw, held = mean_ci(diff), mean_ci(fixed)
+                    rows.append([f"`{name}`", g.label, SITUATIONS[claim], str(int(np.isfinite(diff).sum())), PARTS[part],
+                                 _ci(raw), _ci(held)])
+                    values.append({"sweep": name, "group": g.label, "claim": claim, "part": part,
+                                   "diff": float(raw[0]), "diff_low": float(raw[1]), "diff_high": float(raw[2]),
+                                   "beyond_view": float(held[0]), "beyond_view_low": float(held[1]),
+                                   "beyond_view_high": float(held[2])})
+    note = ("Claims 9 and 12 part by part: each part's excess over the agent's moving average of 50 windows in the "
+            "claim's situation minus out of it (claim 12: touching an object against touching nothing, runs with at "
+            "least 5 touching windows; claim 9: the other agent or a moving object in view against neither, no "
+            "contact of its own), and the same with the share of the view that the objects and the other agent fill "
+            "held fixed (per run, least squares on the situation, that share and its square); mean over runs "
+            "[95 % CI].")
     return Table(cols, rows, values, note if rows else "")
+
 
 def _mean(x: np.ndarray) -> float:
     """The mean over runs, NaN where no run has a value (a block the sweep has not reached)."""

@@ -172,10 +172,12 @@ def claim_observational_curiosity(presets: Mapping[str, Sweep]) -> ClaimResult:
                        tests)
 
 
-def watching_excess(sweep: Sweep, window: int = SMOOTH, moved_m: float = 0.01) -> dict:
+def watching_excess(sweep: Sweep, window: int = SMOOTH, moved_m: float = 0.01, series=None) -> dict:
     """Per run: {"watching", "quiet", "diff"} mean excess curiosity, "beyond_view" the watching
     coefficient with the view's fill held fixed (`beyond_view`) (arrays [runs]), and the window
-    counts {"n_watching", "n_quiet"}, as `claim_observational_curiosity` defines them."""
+    counts {"n_watching", "n_quiet"}, as `claim_observational_curiosity` defines them. `series`
+    [runs, windows, agents]: another per-agent series in place of the curiosity (a part of it,
+    `curiosity_parts.situation_parts_table`)."""
     if sweep.n_agents != 2:
         raise ValueError(f"{sweep.path} has {sweep.n_agents} agent(s): watching another agent needs two")
     k = len(sweep.objects)
@@ -189,12 +191,13 @@ def watching_excess(sweep: Sweep, window: int = SMOOTH, moved_m: float = 0.01) -
     valid[:, 1:] = True
     watching = valid & ~own & moving_in_view
     quiet = valid & ~own & ~moving_in_view
-    cur = sweep.metrics["curiosity"].astype(float)
+    cur = np.asarray(sweep.metrics["curiosity"] if series is None else series, float)
     excess = cur - moving_average(cur, window, axis=1)
     w = _nanmean(np.where(watching, excess, np.nan), axis=(1, 2))
     q = _nanmean(np.where(quiet, excess, np.nan), axis=(1, 2))
     return {"watching": w, "quiet": q, "diff": w - q, "beyond_view": beyond_view(excess, watching, quiet, view),
             "n_watching": int(watching.sum()), "n_quiet": int(quiet.sum())}
+
 
 def claim_contacts_raise_curiosity(presets: Mapping[str, Sweep]) -> ClaimResult:
     """Claim 12: an agent's own contacts with objects raise its curiosity (fig. 9 and section 4.1:
@@ -256,7 +259,7 @@ def contact_excess(sweep: Sweep, group: Group, window: int = SMOOTH, min_windows
     touching coefficient with the view's fill held fixed (arrays [runs]), and the window counts
     {"n_touching", "n_apart"}, as `claim_contacts_raise_curiosity` defines them. `series`
     [group's runs, windows, agents]: another per-agent series in place of the curiosity (a part of
-    it, `curiosity_parts.touching_parts_table`)."""
+    it, `curiosity_parts.situation_parts_table`)."""
     m = sweep.metrics
     touching = m["contact_object"][group.indices].sum(axis=3) > 0  # [n, W, A]
     other = m["contact_agent"][group.indices] > 0
