@@ -279,6 +279,32 @@ def test_full_length_evidence_on_the_tiny_sweep(results, tiny_sweep, tiny_single
     assert results.full_length_block(tmp_path / "missing.json").startswith("No sweep of the paper's full length")
 
 
+
+def test_contact_timing_of_a_full_length_sweep_from_planted_cumulative_curves(results):
+    # 80 bins of 1,000 steps. "steady": 2 contact steps a bin before step 25,000 and 4 + the run's
+    # index after; "stops": 6 a bin up to step 30,000, none after, in two runs of three.
+    steps = list(range(1000, 80_001, 1000))
+    per_bin = []
+    for k in range(3):
+        per_bin.append([2 if s <= 25_000 else 4 + k for s in steps])
+    for k in range(3):
+        per_bin.append([6 if s <= 30_000 or k == 2 else 0 for s in steps])
+    cum = np.cumsum(per_bin, axis=1).tolist()
+    e = {"curves": {"bin_steps": 1000, "groups": {"steady": [0, 1, 2], "stops": [3, 4, 5]},
+                    "long": {"steps": steps, "object_contacts": cum}}}
+    lines = results._contact_timing(e)
+    rows = {r.split(" | ")[0].strip("| "): r.split(" | ") for r in lines if r.startswith(("| steady", "| stops"))}
+    assert rows["steady"][1:3] == ["2.0", "5.0"]  # before, after: 4, 5, 6 a bin
+    assert rows["steady"][3] == "3.0 [0.5, 5.5]"  # 2, 3, 4: mean 3, t(0.975, 2) x 1 / sqrt(3)
+    assert rows["steady"][4] == f"{an.t_pvalue(3 * math.sqrt(3), 2):.2g}"
+    share = np.mean([100 * (25 * 2 + 15 * (4 + k)) / (25 * 2 + 55 * (4 + k)) for k in range(3)])  # by step 40,000
+    assert rows["steady"][5].startswith(f"{share:.0f} % [")
+    assert rows["steady"][6] == "3 of 3 |" and rows["stops"][6] == "1 of 3 |"
+    # Too short a run for the marks: no table.
+    short = {"curves": {"bin_steps": 1000, "groups": {"steady": [0]},
+                        "long": {"steps": steps[:30], "object_contacts": [c[:30] for c in cum[:1]]}}}
+    assert results._contact_timing(short) == []
+
 def test_full_length_evidence_refuses_bad_command_lines(tiny_sweep, tmp_path, capsys, monkeypatch):
     module = _full_length_module()
     monkeypatch.setattr(module, "OUT", tmp_path / "out" / "full_length.json")
