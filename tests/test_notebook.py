@@ -98,6 +98,10 @@ def test_notebook_runs(tiny_sweeps_dir, tmp_path):
     said = "".join(o.get("text", "") for c in nb.cells if c.cell_type == "code" for o in c.outputs
                    if o.output_type == "stream")
     assert said.count("multi.seeds-2-3: no checkpoint") == 2, said
+    shown = "".join(o.get("data", {}).get("text/markdown", "") for c in nb.cells if c.cell_type == "code"
+                    for o in c.outputs if o.output_type == "display_data")
+    assert "fall [95 % CI]" in shown  # claim 1 taken apart
+    assert "Claims 9 and 12 part by part" in shown  # watching and touching taken apart too
     for s, groups in slugs.items():
         expected |= {f"{s}-fig11-curiosity-policies", f"{s}-fig21-22-cumulative-interactions", f"{s}-fig10-actions",
                      f"{s}-losses", f"{s}-turn-reversals", f"{s}-self-model-tracking"}
