@@ -493,7 +493,6 @@ def test_error_without_spread_figure_values(sweep):
     plt.close(fig)
 
 
-
 def test_claim_effects_figure_draws_each_test_where_its_interval_lies():
     """One row per test with an effect, top to bottom in the table's order: blue on the paper's
     side, red on the other, grey across 0; filled where Holm's adjustment keeps it."""
@@ -514,6 +513,7 @@ def test_claim_effects_figure_draws_each_test_where_its_interval_lies():
     plt.close(fig)
     with pytest.raises(ValueError, match="no test with an effect"):
         an.plot_claim_effects(an.Table([], [], [table.values[2]], ""), plt.subplots()[1])
+
 
 def test_empty_figure_refused(tmp_path):
     fig, ax = plt.subplots()

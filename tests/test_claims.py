@@ -45,7 +45,8 @@ def fake_sweep(name, n_agents, groups, n_windows, seeds=3, walls="same", preset=
 
 
 POLICIES = [("eps", 0.2), ("boltzmann", 1.5), ("ucb", 1.0)]
-KEYS = ["1", "2", "3", "4", "5", "6a", "6b", "6c", "7", "8", "9", "10", "11", "12", "13"]  # the claims, in the table's order
+# The claims, in the table's order.
+KEYS = ["1", "2", "3", "4", "5", "6a", "6b", "6c", "7", "8", "9", "10", "11", "12", "13"]
 
 
 def test_assign_presets_by_settings_name_and_manifest():
@@ -239,7 +240,6 @@ def test_temperatures_anova_on_planted_late_curiosity():
     assert r.verdict.startswith("not testable at this scale (needs runs of >= 40,000 steps"), r.verdict
 
 
-
 def test_temperature_table_on_planted_runs():
     # Three temperatures, 3 seeds, 10 windows of 14 steps, two agents. Actions: at T = 0.01 one
     # action only (entropy 0, top share 1), at T = 0.1 every action twice a window (entropy 1, top
@@ -288,6 +288,7 @@ def test_temperature_table_on_planted_runs():
             {k: x for k, x in want.items() if k != "T"}, nan_ok=True)
     eps = an.policy_measures_table(fake_sweep("eps", 2, [("eps", 0.2), ("ucb", 1.0)], 4))
     assert [r[0] for r in eps.rows] == ["ε-greedy (ε=0.2)", "UCB (c=1)"]
+
 
 def test_seed_coupling_on_planted_actions_and_curiosity():
     # Two temperatures, 3 seeds, 8 windows. Each seed's action counts are its own (seed s takes
@@ -908,7 +909,6 @@ def test_policy_curiosity_claims_on_planted_runs():
         "not testable at this scale (needs runs of >= 40,000 steps (multi_agent has 2,000)")
 
 
-
 def test_contacts_raise_curiosity_on_planted_windows():
     rng = np.random.default_rng(12)
     single = fake_sweep("single_agent", 1, POLICIES, 600, seeds=3)  # 12,000 steps
@@ -955,7 +955,6 @@ def test_contacts_raise_curiosity_on_planted_windows():
     assert cl.claim_contacts_raise_curiosity({"single_agent": single}).verdict.startswith("not testable at this scale")
 
 
-
 def test_situation_parts_split_claims_9_and_12_into_error_and_spread():
     # Planted: touching raises the world model's error by 0.03 and the spread by 0.02; a full view
     # (half the touching windows' fill is the object) raises the error by 0.1 per unit of fill more.
@@ -998,6 +997,7 @@ def test_situation_parts_split_claims_9_and_12_into_error_and_spread():
         assert watched[group, "error"]["diff"] == pytest.approx(0.0, abs=0.003)
     # No sweep that records the spread with sampled latents: no rows.
     assert an.situation_parts_table({"single_agent.z_mean": mean_latent}).rows == []
+
 
 def test_contacts_begin_late_on_planted_rates():
     single = fake_sweep("single_agent", 1, POLICIES, 2000, seeds=3)  # 40,000 steps

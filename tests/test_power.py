@@ -138,7 +138,6 @@ def test_power_table_on_planted_sweeps():
     assert "| objects UCB > ε | 0 | 0, 0 | 0 | n/a | 3 | none: no effect observed | 0 | 0 |" in table.to_markdown()
 
 
-
 def test_standardised_effect_is_the_effect_and_its_interval_over_the_runs_spread():
     # One sample 1, 2, 3, 4 against 0: mean 2.5, sd sqrt(5/3), se sd / 2, t(0.975, 3) = 3.182446.
     one = cl.Tested(np.array([1.0, 2.0, 3.0, 4.0, np.nan]))
@@ -160,6 +159,7 @@ def test_standardised_effect_is_the_effect_and_its_interval_over_the_runs_spread
     # No effect to standardise: a blocked claim of no difference, one run, no spread.
     for t in (cl.Tested(np.ones((3, 3)), blocked=True), cl.Tested(np.array([1.0])), cl.Tested(np.ones(4))):
         assert all(math.isnan(v) for v in pw.standardised_effect(t)), t
+
 
 def test_largest_allowed_is_the_one_sided_upper_confidence_bound():
     # One sample 1, 2, 3, 4 against 0: mean 2.5, se sqrt(5/3) / 2, t(0.95, 3) = 2.353363 (tables).

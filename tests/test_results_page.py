@@ -279,7 +279,6 @@ def test_full_length_evidence_on_the_tiny_sweep(results, tiny_sweep, tiny_single
     assert results.full_length_block(tmp_path / "missing.json").startswith("No sweep of the paper's full length")
 
 
-
 def test_contact_timing_of_a_full_length_sweep_from_planted_cumulative_curves(results):
     # 80 bins of 1,000 steps. "steady": 2 contact steps a bin before step 25,000 and 4 + the run's
     # index after; "stops": 6 a bin up to step 30,000, none after, in two runs of three.
@@ -304,6 +303,7 @@ def test_contact_timing_of_a_full_length_sweep_from_planted_cumulative_curves(re
     short = {"curves": {"bin_steps": 1000, "groups": {"steady": [0]},
                         "long": {"steps": steps[:30], "object_contacts": [c[:30] for c in cum[:1]]}}}
     assert results._contact_timing(short) == []
+
 
 def test_full_length_evidence_refuses_bad_command_lines(tiny_sweep, tmp_path, capsys, monkeypatch):
     module = _full_length_module()

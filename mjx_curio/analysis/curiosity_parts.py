@@ -211,8 +211,8 @@ def situation_parts_table(presets: Mapping[str, Sweep]) -> Table:
                         d = watching_excess(s, series=x)
                         diff, fixed = d["diff"][g.indices], d["beyond_view"][g.indices]
                     raw, held = mean_ci(diff), mean_ci(fixed)
-                    rows.append([f"`{name}`", g.label, SITUATIONS[claim], str(int(np.isfinite(diff).sum())), PARTS[part],
-                                 _ci(raw), _ci(held)])
+                    runs = str(int(np.isfinite(diff).sum()))
+                    rows.append([f"`{name}`", g.label, SITUATIONS[claim], runs, PARTS[part], _ci(raw), _ci(held)])
                     values.append({"sweep": name, "group": g.label, "claim": claim, "part": part,
                                    "diff": float(raw[0]), "diff_low": float(raw[1]), "diff_high": float(raw[2]),
                                    "beyond_view": float(held[0]), "beyond_view_low": float(held[1]),

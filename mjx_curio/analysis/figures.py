@@ -504,7 +504,6 @@ def plot_temperature_measures(sweep: Sweep, axes, paper_range=(0.5, 2.5), late_f
     return axes
 
 
-
 EFFECT_COLORS = {"paper": "tab:blue", "other way": "tab:red", "neither": "0.55"}
 
 
@@ -547,6 +546,7 @@ def plot_claim_effects(power, ax):
 def _short_test(label: str) -> str:
     """A test's label without the seed range of a merged sweep's name ('multi_agent.seeds-0-7 ...')."""
     return re.sub(r"\.seeds-\d+-\d+", "", label)
+
 
 # ---------------------------------------------------------------------------------- saving
 

@@ -136,6 +136,7 @@ def moving_object_shares(sweep: Sweep, group: Group, min_contacts: int = 20) -> 
         view_share = view[:, mov].sum(axis=1) / view.sum(axis=1)
     return {"contact_share": contact_share, "view_share": view_share}
 
+
 def claim_stop_least(presets: Mapping[str, Sweep]) -> ClaimResult:
     """Claim 6a: `stop` is the action chosen least (figs. 10, 12).
 
@@ -172,6 +173,7 @@ def claim_stop_least(presets: Mapping[str, Sweep]) -> ClaimResult:
     stat = ("margin = share of the least chosen other action - share of stop, mean over runs [95% CI]; "
             + "; ".join(parts))
     return ClaimResult(key, claim, evidence, stat, _decide(gaps, fails, "every margin CI above 0"), values, tests)
+
 
 def claim_rotations_less(presets: Mapping[str, Sweep]) -> ClaimResult:
     """Claim 6c: with a different texture on every wall, the rotations are chosen somewhat less
@@ -225,6 +227,7 @@ def action_shares(sweep: Sweep, group: Group) -> np.ndarray:
     """[runs of the group, actions]: each action's share of all steps of the run (agents pooled)."""
     counts = sweep.metrics["action_counts"][group.indices].astype(float).sum(axis=(1, 2))
     return counts / np.maximum(counts.sum(axis=1, keepdims=True), 1)
+
 
 def claim_boltzmann_trembles(presets: Mapping[str, Sweep]) -> ClaimResult:
     """Claim 6b: Boltzmann agents "tremble" (rapid alternating rotations; section 5), where tuned

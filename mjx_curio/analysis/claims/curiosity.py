@@ -95,6 +95,7 @@ def fall_rise(sweep: Sweep, c: np.ndarray) -> dict:
     late = block_mean(sweep, c, max(t - 10_000, 30_000), t)
     return {"early": early, "trough": trough, "late": late, "fall": early - trough, "rise": late - trough}
 
+
 def claim_two_agents_higher(presets: Mapping[str, Sweep]) -> ClaimResult:
     """Claim 3: two agents have higher curiosity and a higher VAE loss than one (figs. 23, 24).
 
@@ -145,6 +146,7 @@ def claim_two_agents_higher(presets: Mapping[str, Sweep]) -> ClaimResult:
     return ClaimResult(key, claim, evidence, stat, _decide(gaps, fails, "both Welch tests p < 0.05, multi > single"),
                        values, tests)
 
+
 def claim_agents_move_together(presets: Mapping[str, Sweep]) -> ClaimResult:
     """Claim 4: the two agents' curiosity curves move together ("remarkably similar", 4.1.2, 5).
 
@@ -192,6 +194,7 @@ def agent_curiosity_coupling(sweep: Sweep, window: int = SMOOTH) -> dict:
                 cross[i] = np.mean([(fisher_z(pearson_r(c[i, :, 0], c[j, :, 1]))
                                      + fisher_z(pearson_r(c[j, :, 0], c[i, :, 1]))) / 2 for j in others])
     return {"within": within, "cross": cross, "diff": within - cross}
+
 
 def claim_temperatures_alike(presets: Mapping[str, Sweep]) -> ClaimResult:
     """Claim 7: Boltzmann temperatures 0.5-2.5 make no significant difference (fig. 19, 4.1.4).
@@ -276,6 +279,7 @@ def seed_coupling(sweep: Sweep, a: Group, b: Group) -> dict:
         kind["identical"].append(float((counts[i] == counts[j]).all(axis=-1).mean()))
         kind["r"].append(pearson_r(curiosity[i], curiosity[j]))
     return out
+
 
 def claim_boltzmann_least_curious(presets: Mapping[str, Sweep]) -> ClaimResult:
     """Claim 10: Boltzmann records the lowest curiosity of the three policies, throughout the run;

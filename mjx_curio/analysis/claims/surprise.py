@@ -134,6 +134,7 @@ def running_action_baseline(curiosity, action_counts, history: int = SMOOTH, rid
     pred = (x * m).sum(axis=-1)
     return np.where((ny > 0) & ok, pred, np.nan)
 
+
 def claim_observational_curiosity(presets: Mapping[str, Sweep]) -> ClaimResult:
     """Claim 9: observational learning: an agent's curiosity rises while the other agent, or an
     object moving without its touch, is in its view (sections 4.1.2, 5).
@@ -213,8 +214,9 @@ def claim_contacts_raise_curiosity(presets: Mapping[str, Sweep]) -> ClaimResult:
     Reported alongside, not the verdict: the same difference with the share of the view that the
     objects and the other agent fill held fixed (`beyond_view`: per run, the touching coefficient of
     a least-squares fit of the excess on touching, that share and its square), since a touching
-    agent faces an object close up and a view full of objects may surprise by itself. Groups: single_agent ε-greedy (fig. 9's run) and multi_agent UCB (section 4.1.2's), those
-    loaded. Verdict: holds if in every group the 95% CI across runs lies above 0. Context, not the
+    agent faces an object close up and a view full of objects may surprise by itself. Groups:
+    single_agent ε-greedy (fig. 9's run) and multi_agent UCB (section 4.1.2's), those loaded.
+    Verdict: holds if in every group the 95% CI across runs lies above 0. Context, not the
     verdict: the other policies of both sweeps. Scale: runs of >= 10,000 steps (past the initial
     fall), >= MIN_SEEDS runs with touching windows a group.
     """
