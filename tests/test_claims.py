@@ -329,6 +329,15 @@ def test_agents_move_together_against_other_runs():
     assert np.all(np.tanh(d["within"]) > 0.99)
     r = cl.claim_agents_move_together({"multi_agent": s})
     assert r.verdict.startswith("holds"), r.verdict
+    assert "Context" not in r.statistic
+    # A z=mean side experiment is read as context, with its own numbers, and leaves the verdict be.
+    side = fake_sweep("multi_agent.z_mean", 2, [("eps", 0.2)], 600, seeds=3, z="mean")
+    side.metrics["curiosity"][:, :, 0] = np.cumsum(rng.normal(size=(3, 600)), axis=1)
+    side.metrics["curiosity"][:, :, 1] = np.cumsum(rng.normal(size=(3, 600)), axis=1)
+    both = cl.claim_agents_move_together({"multi_agent": s, "multi_agent.z_mean": side})
+    assert both.verdict == r.verdict and "Context, not the verdict: multi_agent.z_mean" in both.statistic
+    assert both.values["multi_agent.z_mean diff"] == pytest.approx(
+        float(np.mean(cl.agent_curiosity_coupling(side)["diff"])))
     # Agent 1 of each run on a course of its own: no closer to agent 0 than agents of other runs are.
     s.metrics["curiosity"][:, :, 1] = np.cumsum(rng.normal(size=(s.n_runs, 600)), axis=1)
     r = cl.claim_agents_move_together({"multi_agent": s})

@@ -67,6 +67,7 @@ from mjx_curio.analysis.claims.common import (
     seed_table,
 )
 from mjx_curio.analysis.claims.curiosity import (
+    MEAN_LATENT_SIDE,
     agent_curiosity_coupling,
     claim_agents_move_together,
     claim_boltzmann_least_curious,
@@ -110,8 +111,8 @@ from mjx_curio.analysis.claims.surprise import (
 )
 
 __all__ = [
-    "ALPHA", "CLAIMS", "CONTACT_ONSET", "ClaimResult", "MIN_SEEDS", "MOVING_OBJECTS", "PAPER_SETTING",
-    "PRESET_SETTINGS", "SMOOTH", "Tested", "VERDICTS", "action_shares", "agent_curiosity_coupling",
+    "ALPHA", "CLAIMS", "CONTACT_ONSET", "ClaimResult", "MEAN_LATENT_SIDE", "MIN_SEEDS", "MOVING_OBJECTS",
+    "PAPER_SETTING", "PRESET_SETTINGS", "SMOOTH", "Tested", "VERDICTS", "action_shares", "agent_curiosity_coupling",
     "assign_presets", "balanced_rotation_share", "beyond_view", "block_mean", "claim_agents_move_together",
     "claim_boltzmann_least_curious", "claim_boltzmann_trembles", "claim_contact_ranking",
     "claim_contacts_begin_late", "claim_contacts_raise_curiosity", "claim_curiosity_dip_and_rise",
