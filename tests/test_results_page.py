@@ -8,6 +8,7 @@ import io
 import json
 import math
 import pathlib
+import re
 import shutil
 import sys
 
@@ -61,6 +62,13 @@ def _assert_same_csv(committed: str, computed: str):
                 continue
             assert math.isclose(x, y, rel_tol=1e-9, abs_tol=1e-12) or (math.isnan(x) and math.isnan(y)), (
                 ra.get("key", ra.get("group")), k, x, y)
+
+
+def test_the_pages_links_to_its_own_sections_find_them():
+    page = (ROOT / "docs" / "results.md").read_text()
+    slugs = {re.sub(r"[^\w\- ]", "", h.lower()).replace(" ", "-") for h in re.findall(r"^#+ (.+)$", page, re.M)}
+    links = re.findall(r"\]\(#([^)]+)\)", page)
+    assert links and set(links) <= slugs, sorted(set(links) - slugs)
 
 
 def test_the_readme_links_the_page():
