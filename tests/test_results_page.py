@@ -71,6 +71,22 @@ def test_the_pages_links_to_its_own_sections_find_them():
     assert links and set(links) <= slugs, sorted(set(links) - slugs)
 
 
+def test_the_headline_count_of_claims_that_hold_is_the_tables(results):
+    # The README and the page say in words how many claims hold; the claims table decides it.
+    presets = results.load_presets()
+    if not presets:
+        pytest.skip("no snapshot committed")
+    verdicts = [v["verdict"] for v in an.claims_table(presets).values]
+    words = "zero one two three four five six seven eight nine ten eleven twelve thirteen fourteen fifteen sixteen " \
+            "seventeen eighteen nineteen twenty".split()
+    held, total = sum(v.startswith("holds") for v in verdicts), len(verdicts)
+    phrase = f"{words[held]} of the {words[total]}"
+    readme = " ".join((ROOT / "README.md").read_text().split())
+    page = " ".join((ROOT / "docs" / "results.md").read_text().split())
+    assert phrase.capitalize() in readme or phrase in readme, phrase
+    assert f"{phrase} hold" in page, phrase
+
+
 def test_the_readme_links_the_page():
     head = (ROOT / "README.md").read_text().split("\n## ")[0]
     assert "docs/results.md" in head
