@@ -1,4 +1,4 @@
-"""key=value command lines, shared by `python -m mjx_curio.sweep`, `.bench` and `.video`.
+"""key=value command lines, shared by `python -m mjx_curio.sweep`, `.bench`, `.video` and `.verdicts`.
 
 A program's keys are `Key`s: a name, a default, a one-line help and a *kind* from config.py
 that reads the text after `=` and checks the value (`ConfigError` naming the key and what is
