@@ -55,6 +55,9 @@ def main(argv=None) -> int:
         return 2
     names = TABLES if v["table"] == "both" else (v["table"],)
     out = pathlib.Path(v["out"]).expanduser() if v["out"] else None
+    if out is not None and out.exists() and not out.is_dir():
+        print(f"error: out={v['out']}: {out} is a file, not a directory", file=sys.stderr)
+        return 2
     if out is not None:
         taken = [out / f"{n}.{ext}" for n in names for ext in ("md", "csv") if (out / f"{n}.{ext}").exists()]
         if taken:

@@ -70,6 +70,15 @@ def test_a_directory_without_sweeps_is_refused(tmp_path, capsys):
     assert not any(tmp_path.iterdir())  # nothing written
 
 
+def test_an_out_that_is_a_file_is_refused_before_any_work(tmp_path, capsys):
+    f = tmp_path / "taken"
+    f.write_text("mine")
+    assert verdicts.main([f"sweeps={SNAPSHOTS}", f"out={f}"]) == 2
+    captured = capsys.readouterr()
+    assert f"out={f}" in captured.err and "is a file" in captured.err and captured.out == ""
+    assert f.read_text() == "mine"
+
+
 def _exit_code(argv) -> int:
     """The command's exit status, whether it returns it or exits with it (bad keys exit at parsing)."""
     try:
