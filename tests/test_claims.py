@@ -46,7 +46,7 @@ def fake_sweep(name, n_agents, groups, n_windows, seeds=3, walls="same", preset=
 
 POLICIES = [("eps", 0.2), ("boltzmann", 1.5), ("ucb", 1.0)]
 # The claims, in the table's order.
-KEYS = ["1", "2", "3", "4", "5", "6a", "6b", "6c", "7", "8", "9", "10", "11", "12", "13"]
+KEYS = ["1", "2", "3", "4", "5", "6a", "6b", "6c", "7", "8", "9", "10", "11", "12", "13", "14"]
 
 
 def test_assign_presets_by_settings_name_and_manifest():
@@ -458,6 +458,49 @@ def test_two_agents_higher_compares_the_same_steps_when_one_sweep_is_longer():
     multi.metrics["vae_loss"][:] += 2 * 20
     r = cl.claim_two_agents_higher({"single_agent": single, "multi_agent": multi})
     assert r.verdict.startswith("holds"), r.verdict
+
+
+def test_two_agent_vae_unsettled_on_planted_volatility():
+    # The loss per image is a flat 100 plus noise of sd 4 a window with one agent. With two agents
+    # the recorded loss sums both views (eq. 5), and its per-image mean over twice the views is
+    # steadier by sqrt(2) when the views vary independently: the same volatility once scaled.
+    rng = np.random.default_rng(11)
+    single = fake_sweep("single_agent", 1, POLICIES, 1000, seeds=6)
+    multi = fake_sweep("multi_agent", 2, POLICIES, 1000, seeds=6)
+    single.metrics["vae_loss"][:] = 100 + 4 * rng.normal(size=single.metrics["vae_loss"].shape)
+    per_image = 100 + 4 / math.sqrt(2) * rng.normal(size=multi.metrics["vae_loss"].shape)
+    multi.metrics["vae_loss"][:] = 2 * per_image
+    g = cl.paper_group(multi, "ucb")
+    d = cl.vae_volatility(multi, g, 10_000, 20_000)
+    x = per_image[g.indices].astype(np.float32).astype(float)
+    resid = x - an.moving_average(x, 50, axis=1)
+    np.testing.assert_allclose(d["per_image"], resid[:, 500:].std(axis=1, ddof=1), rtol=1e-4)
+    np.testing.assert_allclose(d["scaled"], d["per_image"] * math.sqrt(2))
+    halves = x[:, 500:750].mean(axis=1), x[:, 750:].mean(axis=1)
+    np.testing.assert_allclose(d["late_change"], (halves[1] - halves[0]) / halves[0], rtol=1e-4)
+    # The residual around a 50-window trailing mean of white noise has sd ~ 4 * sqrt(1 - 1/50).
+    assert np.mean(d["scaled"]) == pytest.approx(4 * math.sqrt(1 - 1 / 50), rel=0.05)
+    presets = {"single_agent": single, "multi_agent": multi}
+    r = cl.claim_two_agent_vae_unsettled(presets)
+    assert r.key == "14" and "steps 10,000-20,000" in r.statistic
+    assert r.values["per_image multi"] < r.values["per_image single"] and r.values["per_image p"] < 0.001
+    assert r.verdict.startswith("does not hold: the two-agent loss is not significantly more volatile"), r.verdict
+    # Fluctuation beyond the batch size: the two-agent loss per image as noisy as one agent's.
+    multi.metrics["vae_loss"][:] = 2 * (100 + 4 * rng.normal(size=multi.metrics["vae_loss"].shape))
+    r = cl.claim_two_agent_vae_unsettled(presets)
+    assert r.verdict == "holds (Welch p < 0.05, multi > single)", r.verdict
+    assert r.values["scaled multi"] == pytest.approx(math.sqrt(2) * r.values["scaled single"], rel=0.05)
+    # Short runs, different image sizes, or no UCB runs: not testable.
+    short = fake_sweep("multi_agent", 2, POLICIES, 400)
+    assert cl.claim_two_agent_vae_unsettled({"single_agent": single, "multi_agent": short}).verdict.startswith(
+        "not testable at this scale")
+    big = fake_sweep("multi_agent", 2, POLICIES, 1000, seeds=6)
+    big.manifest["run_config"]["image"] = 32
+    assert "differ in image size" in cl.claim_two_agent_vae_unsettled({"single_agent": single,
+                                                                        "multi_agent": big}).verdict
+    no_ucb = fake_sweep("multi_agent", 2, POLICIES[:2], 1000)
+    assert "multi_agent has no UCB runs" in cl.claim_two_agent_vae_unsettled(
+        {"single_agent": single, "multi_agent": no_ucb}).verdict
 
 
 def test_running_action_baseline_recovers_per_action_means():

@@ -36,7 +36,8 @@ sweep run by hand with a preset's settings stands in for it. A sweep named `<pre
 apart from the preset's sweep, read by the claims that name it (claim 6b reads `multi_agent.*`
 where the `multi_agent` sweep does not record the order of actions).
 
-The claims live by subject: `curiosity` (its level and course: claims 1, 3, 4, 7, 10, 11),
+The claims live by subject: `curiosity` (its level and course: claims 1, 3, 4, 7, 10, 11; and the
+VAE's loss beside it: 14),
 `behaviour` (what the agents do: 2, 5, 6a, 6b, 6c, 13) and `surprise` (what surprises an agent: 8,
 9, 12), on what they share in `common` (`Tested`, `ClaimResult`, `assign_presets`, the verdict
 rules); this module gathers them in the table's order (`CLAIMS`) and re-exports their names.
@@ -73,6 +74,7 @@ from mjx_curio.analysis.claims.curiosity import (
     claim_boltzmann_least_curious,
     claim_curiosity_dip_and_rise,
     claim_temperatures_alike,
+    claim_two_agent_vae_unsettled,
     claim_two_agents_higher,
     claim_ucb_more_curious,
     curiosity_fall_rise,
@@ -80,6 +82,7 @@ from mjx_curio.analysis.claims.curiosity import (
     late_curiosity,
     run_curiosity,
     seed_coupling,
+    vae_volatility,
 )
 from mjx_curio.analysis.claims.behaviour import (
     CONTACT_ONSET,
@@ -117,11 +120,12 @@ __all__ = [
     "claim_boltzmann_least_curious", "claim_boltzmann_trembles", "claim_contact_ranking",
     "claim_contacts_begin_late", "claim_contacts_raise_curiosity", "claim_curiosity_dip_and_rise",
     "claim_observational_curiosity", "claim_prefers_moving_objects", "claim_results", "claim_rotations_less",
-    "claim_self_model_predicts", "claim_stop_least", "claim_temperatures_alike", "claim_two_agents_higher",
+    "claim_self_model_predicts", "claim_stop_least", "claim_temperatures_alike", "claim_two_agent_vae_unsettled",
+    "claim_two_agents_higher",
     "claim_ucb_more_curious", "claims_table", "contact_excess", "contact_onset", "curiosity_fall_rise", "fall_rise",
     "late_curiosity", "move_rotation_margin", "moving_object_shares", "paper_group", "preset_and_sides",
     "reversal_rate", "reversals_against_shuffled", "rotation_share", "run_curiosity", "running_action_baseline",
-    "seed_coupling", "seed_table", "self_model_tracking", "watching_excess",
+    "seed_coupling", "seed_table", "self_model_tracking", "vae_volatility", "watching_excess",
 ]
 
 
@@ -129,7 +133,7 @@ CLAIMS: tuple[Callable[[Mapping[str, Sweep]], ClaimResult], ...] = (
     claim_curiosity_dip_and_rise, claim_contact_ranking, claim_two_agents_higher, claim_agents_move_together,
     claim_prefers_moving_objects, claim_stop_least, claim_boltzmann_trembles, claim_rotations_less,
     claim_temperatures_alike, claim_self_model_predicts, claim_observational_curiosity, claim_boltzmann_least_curious,
-    claim_ucb_more_curious, claim_contacts_raise_curiosity, claim_contacts_begin_late,
+    claim_ucb_more_curious, claim_contacts_raise_curiosity, claim_contacts_begin_late, claim_two_agent_vae_unsettled,
 )
 
 
