@@ -337,6 +337,8 @@ def full_length_block(path: pathlib.Path = FULL_LENGTH) -> str:
              "length):", "",
              "| # | claim | our statistic | verdict |", "|---|---|---|---|"]
     lines += [f"| {r['claim']} | {r['text']} | {r['statistic']} | {r['verdict']} |" for r in e["claims"]]
+    if not any(r["claim"] == "15" for r in e["claims"]):
+        lines += [row for x in e["sweeps"] for row in _agent_contact_order_row(x)]
     for x in e["sweeps"]:
         lines += ["", *_full_length_sweep(x)]
     return "\n".join(lines) + "\n"
@@ -385,6 +387,23 @@ def _full_length_sweep(e: dict) -> list[str]:
              f"contact steps rather than normalised; the {e['runs']} runs of {e['steps']:,} steps (solid) and the "
              f"committed runs of {c['steps']:,} (dashed).*"]
     return lines
+
+
+def _agent_contact_order_row(e: dict) -> list[str]:
+    """Claim 15's row of the full-length claims table, from a two-agent sweep's cumulative
+    agent-agent contact curves (their last point is each run's total, what the claim counts), for
+    a full_length.json written before the claim existed; empty where the sweep is too short."""
+    from mjx_curio.analysis.claims import AGENT_PHASE_STEPS, agent_contact_order, claim_boltzmann_agents_meet
+
+    cv = e["curves"]
+    if e["agents"] < 2 or cv["long"]["steps"][-1] < AGENT_PHASE_STEPS:
+        return []
+    totals = np.asarray([r[-1] for r in cv["long"]["agent_contacts"]], float)
+    policies = {"ε-greedy": "eps", "Boltzmann": "boltzmann", "UCB": "ucb"}
+    by_policy = {policies[label.split(" (")[0]]: totals[idx] for label, idx in cv["groups"].items()}
+    d = agent_contact_order(by_policy)
+    claim = claim_boltzmann_agents_meet({}).claim  # its wording; with no sweep it tests nothing
+    return [f"| 15 | {claim} | {e['sweep']} (from its cumulative contact curves): {d['text']} | {d['verdict']} |"]
 
 
 def _contact_timing(e: dict) -> list[str]:

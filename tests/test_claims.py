@@ -46,7 +46,7 @@ def fake_sweep(name, n_agents, groups, n_windows, seeds=3, walls="same", preset=
 
 POLICIES = [("eps", 0.2), ("boltzmann", 1.5), ("ucb", 1.0)]
 # The claims, in the table's order.
-KEYS = ["1", "2", "3", "4", "5", "6a", "6b", "6c", "7", "8", "9", "10", "11", "12", "13", "14"]
+KEYS = ["1", "2", "3", "4", "5", "6a", "6b", "6c", "7", "8", "9", "10", "11", "12", "13", "14", "15"]
 
 
 def test_assign_presets_by_settings_name_and_manifest():
@@ -1073,6 +1073,35 @@ def test_contacts_begin_late_on_planted_rates():
     assert cl.claim_contacts_begin_late({"single_agent": short}).verdict.startswith(
         "not testable at this scale (needs runs of >= 40,000 steps (single_agent has 20,000)")
     assert "single_agent sweep is missing" in cl.claim_contacts_begin_late({}).verdict
+
+def test_boltzmann_agents_meet_on_planted_contacts():
+    # 80,000 steps: the ε-greedy agents touch each other on 3-5 steps a run, the Boltzmann agents on
+    # 40-60 (in their last quarter, as the paper's run does), UCB's on 100.
+    multi = fake_sweep("multi_agent", 2, POLICIES, 4000, seeds=4)
+    totals = {"eps": [3, 4, 5, 4], "boltzmann": [40, 60, 50, 55], "ucb": [100] * 4}
+    for p, n in totals.items():
+        for r, k in zip(cl.paper_group(multi, p).indices, n):
+            multi.metrics["contact_agent"][r, 3000:3000 + k, :] = 1  # one step a window, both agents see it
+    r = cl.claim_boltzmann_agents_meet({"multi_agent": multi})
+    assert r.key == "15" and r.verdict == "holds (Welch p < 0.05, Boltzmann > ε-greedy)", r.verdict
+    assert r.values["agent-agent boltzmann"] == pytest.approx(51.25)
+    assert r.values["agent-agent eps share of UCB"] == pytest.approx(4.0)
+    assert "Boltzmann 51 [" in r.statistic and "(51 % of UCB's)" in r.statistic
+    assert list(r.tests) == ["agent-agent Boltzmann > ε"]
+    # The other way round: does not hold, and says so.
+    for p in ("eps", "boltzmann"):
+        multi.metrics["contact_agent"][cl.paper_group(multi, p).indices] = 0
+    for r_, k in zip(cl.paper_group(multi, "eps").indices, totals["boltzmann"]):
+        multi.metrics["contact_agent"][r_, :k, :] = 1
+    r = cl.claim_boltzmann_agents_meet({"multi_agent": multi})
+    assert r.verdict == ("does not hold: Boltzmann agents do not touch each other significantly more than "
+                         "ε-greedy ones (fewer)"), r.verdict
+    # Half the paper's length: not testable, the statistic shown, no test for the power table.
+    short = fake_sweep("multi_agent", 2, POLICIES, 2000)
+    r = cl.claim_boltzmann_agents_meet({"multi_agent": short})
+    assert r.verdict.startswith("not testable at this scale (needs runs of >= 80,000 steps") and r.tests == {}
+    assert "agent-agent contact steps per run" in r.statistic
+
 
 # ------------------------------------------------------------------------------ the tiny sweeps
 

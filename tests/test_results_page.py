@@ -329,6 +329,23 @@ def test_contact_timing_of_a_full_length_sweep_from_planted_cumulative_curves(re
     assert results._contact_timing(short) == []
 
 
+def test_claim_15_row_of_a_full_length_sweep_from_planted_cumulative_curves(results):
+    # A full_length.json written before claim 15 existed: its row comes from the curves' last
+    # points, each run's agent-agent contact steps, and says what the claim itself would.
+    steps = list(range(1000, 80_001, 1000))
+    totals = [3, 4, 5, 40, 60, 50, 100, 100, 100]
+    curves = [np.linspace(0, t, len(steps)).round().tolist() for t in totals]
+    labels = {"ε-greedy (ε=0.2)": [0, 1, 2], "Boltzmann (T=1.5)": [3, 4, 5], "UCB (c=1)": [6, 7, 8]}
+    e = {"agents": 2, "sweep": "main", "curves": {"groups": labels, "long": {"steps": steps, "agent_contacts": curves}}}
+    [row] = results._agent_contact_order_row(e)
+    assert row.startswith("| 15 | Boltzmann agents touch each other more often than ε-greedy agents")
+    assert "ε-greedy 4 [" in row and "Boltzmann 50 [" in row and "(50 % of UCB's)" in row
+    assert row.endswith("| holds (Welch p < 0.05, Boltzmann > ε-greedy) |")
+    assert results._agent_contact_order_row({**e, "agents": 1}) == []
+    short = {**e, "curves": {"groups": labels, "long": {"steps": steps[:40], "agent_contacts": [c[:40] for c in curves]}}}
+    assert results._agent_contact_order_row(short) == []
+
+
 def test_full_length_evidence_refuses_bad_command_lines(tiny_sweep, tmp_path, capsys, monkeypatch):
     module = _full_length_module()
     monkeypatch.setattr(module, "OUT", tmp_path / "out" / "full_length.json")

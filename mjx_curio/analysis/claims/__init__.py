@@ -38,7 +38,7 @@ where the `multi_agent` sweep does not record the order of actions).
 
 The claims live by subject: `curiosity` (its level and course: claims 1, 3, 4, 7, 10, 11; and the
 VAE's loss beside it: 14),
-`behaviour` (what the agents do: 2, 5, 6a, 6b, 6c, 13) and `surprise` (what surprises an agent: 8,
+`behaviour` (what the agents do: 2, 5, 6a, 6b, 6c, 13, 15) and `surprise` (what surprises an agent: 8,
 9, 12), on what they share in `common` (`Tested`, `ClaimResult`, `assign_presets`, the verdict
 rules); this module gathers them in the table's order (`CLAIMS`) and re-exports their names.
 
@@ -85,10 +85,13 @@ from mjx_curio.analysis.claims.curiosity import (
     vae_volatility,
 )
 from mjx_curio.analysis.claims.behaviour import (
+    AGENT_PHASE_STEPS,
     CONTACT_ONSET,
     MOVING_OBJECTS,
     action_shares,
+    agent_contact_order,
     balanced_rotation_share,
+    claim_boltzmann_agents_meet,
     claim_boltzmann_trembles,
     claim_contact_ranking,
     claim_contacts_begin_late,
@@ -114,18 +117,19 @@ from mjx_curio.analysis.claims.surprise import (
 )
 
 __all__ = [
-    "ALPHA", "CLAIMS", "CONTACT_ONSET", "ClaimResult", "MEAN_LATENT_SIDE", "MIN_SEEDS", "MOVING_OBJECTS",
-    "PAPER_SETTING", "PRESET_SETTINGS", "SMOOTH", "Tested", "VERDICTS", "action_shares", "agent_curiosity_coupling",
-    "assign_presets", "balanced_rotation_share", "beyond_view", "block_mean", "claim_agents_move_together",
-    "claim_boltzmann_least_curious", "claim_boltzmann_trembles", "claim_contact_ranking",
-    "claim_contacts_begin_late", "claim_contacts_raise_curiosity", "claim_curiosity_dip_and_rise",
-    "claim_observational_curiosity", "claim_prefers_moving_objects", "claim_results", "claim_rotations_less",
-    "claim_self_model_predicts", "claim_stop_least", "claim_temperatures_alike", "claim_two_agent_vae_unsettled",
-    "claim_two_agents_higher",
-    "claim_ucb_more_curious", "claims_table", "contact_excess", "contact_onset", "curiosity_fall_rise", "fall_rise",
-    "late_curiosity", "move_rotation_margin", "moving_object_shares", "paper_group", "preset_and_sides",
-    "reversal_rate", "reversals_against_shuffled", "rotation_share", "run_curiosity", "running_action_baseline",
-    "seed_coupling", "seed_table", "self_model_tracking", "vae_volatility", "watching_excess",
+    "AGENT_PHASE_STEPS", "ALPHA", "CLAIMS", "CONTACT_ONSET", "ClaimResult", "MEAN_LATENT_SIDE", "MIN_SEEDS",
+    "MOVING_OBJECTS", "PAPER_SETTING", "PRESET_SETTINGS", "SMOOTH", "Tested", "VERDICTS", "action_shares",
+    "agent_contact_order", "agent_curiosity_coupling", "assign_presets", "balanced_rotation_share", "beyond_view",
+    "block_mean", "claim_agents_move_together", "claim_boltzmann_agents_meet", "claim_boltzmann_least_curious",
+    "claim_boltzmann_trembles", "claim_contact_ranking", "claim_contacts_begin_late",
+    "claim_contacts_raise_curiosity", "claim_curiosity_dip_and_rise", "claim_observational_curiosity",
+    "claim_prefers_moving_objects", "claim_results", "claim_rotations_less", "claim_self_model_predicts",
+    "claim_stop_least", "claim_temperatures_alike", "claim_two_agent_vae_unsettled", "claim_two_agents_higher",
+    "claim_ucb_more_curious", "claims_table", "contact_excess", "contact_onset", "curiosity_fall_rise",
+    "fall_rise", "late_curiosity", "move_rotation_margin", "moving_object_shares", "paper_group",
+    "preset_and_sides", "reversal_rate", "reversals_against_shuffled", "rotation_share", "run_curiosity",
+    "running_action_baseline", "seed_coupling", "seed_table", "self_model_tracking", "vae_volatility",
+    "watching_excess",
 ]
 
 
@@ -134,6 +138,7 @@ CLAIMS: tuple[Callable[[Mapping[str, Sweep]], ClaimResult], ...] = (
     claim_prefers_moving_objects, claim_stop_least, claim_boltzmann_trembles, claim_rotations_less,
     claim_temperatures_alike, claim_self_model_predicts, claim_observational_curiosity, claim_boltzmann_least_curious,
     claim_ucb_more_curious, claim_contacts_raise_curiosity, claim_contacts_begin_late, claim_two_agent_vae_unsettled,
+    claim_boltzmann_agents_meet,
 )
 
 
