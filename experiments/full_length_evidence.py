@@ -98,15 +98,15 @@ def _same_setup(long, short) -> None:
 
 
 def _curves(sweep) -> dict:
-    """Per run, in bins of BIN_STEPS: the curiosity (mean of the agents), and the contact steps
-    with objects and between the agents summed from the start (figs. 21 and 22, not normalised)."""
+    """Per run, in bins of BIN_STEPS (`analysis.run_curves`), as JSON lists: the curiosity (mean of
+    the agents, rounded), and the contact steps with objects and between the agents summed from
+    the start (figs. 21 and 22, not normalised)."""
     from mjx_curio import analysis as an
 
-    steps, c = an.bin_windows(sweep, sweep.metrics["curiosity"].mean(axis=2), every=BIN_STEPS, reduce="mean")
-    out = {"steps": [int(s) for s in steps], "runs": [_floats(r, digits=6) for r in c]}
-    for key, counts in (("object_contacts", an.object_contacts(sweep)), ("agent_contacts", an.agent_contacts(sweep))):
-        _, binned = an.bin_windows(sweep, counts, every=BIN_STEPS, reduce="sum")
-        out[key] = [[int(v) for v in np.cumsum(r)] for r in binned]
+    cv = an.run_curves(sweep, BIN_STEPS)
+    out = {"steps": [int(s) for s in cv["steps"]], "runs": [_floats(r, digits=6) for r in cv["runs"]]}
+    for key in ("object_contacts", "agent_contacts"):
+        out[key] = [[int(v) for v in r] for r in cv[key]]
     return out
 
 

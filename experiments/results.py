@@ -18,7 +18,8 @@ page's `multi_agent.order` records the order of actions, which claim 6b needs an
 (`mjx_curio.analysis.plot_*`) into docs/figures/results/, and rewrites the generated blocks of
 docs/results.md (between `<!-- generated: NAME -->` and `<!-- end: NAME -->`): the scale of the
 sweeps, the figures with their captions, the claims table (`analysis.claims_table`), the
-seeds each claim's tests need (`analysis.power_table`), claim 1's fall and rise taken apart
+numbers the paper reads off its figures beside ours (`analysis.paper_numbers_table`, with a
+column for the full-length sweeps), the seeds each claim's tests need (`analysis.power_table`), claim 1's fall and rise taken apart
 into the world model's error and the posterior's spread (`analysis.curiosity_parts_table`), the
 Boltzmann temperatures measure by measure (`analysis.temperature_table`), different walls against identical ones
 (`analysis.walls_table`) and the reconstructions' quality over training (from
@@ -28,8 +29,8 @@ writes, with their figures); the rest
 of the page (what the verdicts mean, why a claim may fail here) is prose and stays as written.
 The claims' numbers also go to docs/results/claims.csv, the walls table's to docs/results/walls.csv.
 
-`check` recomputes the scale, claims, power, curiosity parts, temperatures, walls, reconstructions
-and full-length blocks from the committed results and exits 1 if they differ from the page (the
+`check` recomputes the scale, claims, paper's numbers, power, curiosity parts, temperatures, walls,
+reconstructions and full-length blocks from the committed results and exits 1 if they differ from the page (the
 test suite does the same).
 """
 
@@ -399,11 +400,33 @@ def _agent_contact_order_row(e: dict) -> list[str]:
     if e["agents"] < 2 or cv["long"]["steps"][-1] < AGENT_PHASE_STEPS:
         return []
     totals = np.asarray([r[-1] for r in cv["long"]["agent_contacts"]], float)
-    policies = {"ε-greedy": "eps", "Boltzmann": "boltzmann", "UCB": "ucb"}
-    by_policy = {policies[label.split(" (")[0]]: totals[idx] for label, idx in cv["groups"].items()}
-    d = agent_contact_order(by_policy)
+    d = agent_contact_order({p: totals[idx] for p, idx in _policy_groups(cv["groups"]).items()})
     claim = claim_boltzmann_agents_meet({}).claim  # its wording; with no sweep it tests nothing
     return [f"| 15 | {claim} | {e['sweep']} (from its cumulative contact curves): {d['text']} | {d['verdict']} |"]
+
+
+def _policy_groups(groups: dict) -> dict:
+    """A full-length JSON's groups ({label: run indices}, one group a policy) as {policy: run
+    indices}."""
+    from mjx_curio.analysis import POLICY_LABELS
+
+    policy = {label: p for p, label in POLICY_LABELS.items()}
+    return {policy[label.split(" (")[0]]: idx for label, idx in groups.items()}
+
+
+def paper_numbers_block(presets: dict, path: pathlib.Path = FULL_LENGTH) -> str:
+    """The paper's numbers beside ours (`analysis.paper_numbers_table`): on the committed runs, and
+    on the full-length runs of full_length.json where it exists."""
+    from mjx_curio import analysis as an
+
+    if not presets:
+        return "No snapshot has been committed yet.\n"
+    long, label = {}, "80,000 steps"
+    if path.exists():
+        sweeps = json.loads(path.read_text())["sweeps"]
+        long = {e["preset"]: (e["curves"]["long"], _policy_groups(e["curves"]["groups"])) for e in sweeps}
+        label = " and ".join(f"`{e['sweep']}`, {e['steps']:,} steps on {_device(e['device'])}" for e in sweeps)
+    return an.paper_numbers_table(presets, long, label, label="the committed runs").to_markdown()
 
 
 def _contact_timing(e: dict) -> list[str]:
@@ -871,7 +894,7 @@ def computed_blocks(presets: dict) -> dict[str, str]:
     """The blocks that are pure functions of the committed results: the snapshots' metrics, and
     reconstructions.json for the reconstructions block (what `check` compares)."""
     return {"scale": scale_block(presets), "claims": claims_block(presets), "power": power_block(presets),
-            "curiosity_parts": curiosity_parts_block(presets),
+            "curiosity_parts": curiosity_parts_block(presets), "paper_numbers": paper_numbers_block(presets),
             "temperatures": temperatures_block(presets), "walls": walls_block(presets),
             "reconstructions": reconstructions_block(), "full_length": full_length_block()}
 

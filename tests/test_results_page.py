@@ -40,8 +40,8 @@ def test_the_page_is_what_the_committed_metrics_give(results):
     presets = results.load_presets()
     page = results.PAGE.read_text()
     blocks = results.blocks(page)
-    assert set(blocks) == {"scale", "figures", "claims", "power", "curiosity_parts", "temperatures", "walls",
-                           "reconstructions", "full_length"}
+    assert set(blocks) == {"scale", "figures", "claims", "paper_numbers", "power", "curiosity_parts", "temperatures",
+                           "walls", "reconstructions", "full_length"}
     assert blocks["figures"] == results.figures_block(presets, out=None)
     if presets:  # the CSV's full-precision numbers may differ in the last bit on another CPU's NumPy
         _assert_same_csv(results.CLAIMS_CSV.read_text(), an.claims_table(presets).to_csv())

@@ -51,7 +51,8 @@ action_values sweeps; curiosity_noise sweeps and action_values; tables sweeps an
 significance none; self_model significance, stats and sweeps; claims self_model, significance,
 sweeps, stats and tables; curiosity_parts claims, significance, stats, sweeps and tables;
 temperatures claims, significance, stats and tables; power claims, significance and tables; walls
-claims, power, significance, stats, sweeps and tables; figures sweeps, stats, recon,
+claims, power, significance, stats, sweeps and tables; paper_numbers claims, stats, sweeps and
+tables; figures sweeps, stats, recon,
 action_values, curiosity_parts, self_model and temperatures):
 
     sweeps    loading: `load`, `find_sweeps`, `load_sweeps`, `merge_sweeps` (one experiment's seeds
@@ -101,6 +102,9 @@ action_values, curiosity_parts, self_model and temperatures):
               something move, touching an object): `situation_parts_table`
     walls     what a different texture on every wall changes: `walls_table` (each walls-different
               preset against its identical-walls preset, per policy) and `walls_measures`
+    paper_numbers  the numbers the paper reads off its figures beside the same measured on the
+              sweeps: `paper_numbers_table` over `READINGS`, on every run's curve in 1,000-step
+              bins (`run_curves`, also what a full-length sweep's JSON keeps)
     figures   every `plot_*` function, the colours and labels they share, and saving
               (`figures_dir`, `save_figure`, `save_text`, `empty_axes`, `slug`)
 
@@ -122,7 +126,9 @@ from mjx_curio.analysis.claims import (
     assign_presets,
     balanced_rotation_share,
     beyond_view,
+    agent_contact_order,
     claim_agents_move_together,
+    claim_boltzmann_agents_meet,
     claim_boltzmann_least_curious,
     claim_boltzmann_trembles,
     claim_contact_ranking,
@@ -136,6 +142,7 @@ from mjx_curio.analysis.claims import (
     claim_self_model_predicts,
     claim_stop_least,
     claim_temperatures_alike,
+    claim_two_agent_vae_unsettled,
     claim_two_agents_higher,
     claim_ucb_more_curious,
     claims_table,
@@ -153,6 +160,7 @@ from mjx_curio.analysis.claims import (
     running_action_baseline,
     seed_coupling,
     self_model_tracking,
+    vae_volatility,
     watching_excess,
 )
 from mjx_curio.analysis.curiosity_parts import (
@@ -278,6 +286,7 @@ from mjx_curio.analysis.power import (
 )
 from mjx_curio.analysis.temperatures import policy_measures_table, temperature_measures, temperature_table
 from mjx_curio.analysis.walls import WALLS_PAIRS, walls_measures, walls_table
+from mjx_curio.analysis.paper_numbers import READINGS, Reading, paper_numbers_table, reading_value, run_curves
 
 __all__ = [
     # sweeps
@@ -303,6 +312,8 @@ __all__ = [
     "policy_measures_table", "temperature_measures", "temperature_table",
     # walls
     "WALLS_PAIRS", "walls_measures", "walls_table",
+    # paper_numbers
+    "READINGS", "Reading", "paper_numbers_table", "reading_value", "run_curves",
     # power
     "detectable", "largest_allowed", "noncentral_t_sf", "p_value", "power_table", "seeds_needed", "standardised_effect", "t_power",
     # self_model
@@ -321,7 +332,8 @@ __all__ = [
     "claim_two_agents_higher", "claim_results", "claims_table", "curiosity_fall_rise", "fall_rise",
     "late_curiosity", "move_rotation_margin", "moving_object_shares", "reversal_rate", "run_curiosity",
     "reversals_against_shuffled", "rotation_share", "running_action_baseline", "seed_coupling",
-    "self_model_tracking", "watching_excess",
+    "self_model_tracking", "watching_excess", "agent_contact_order", "claim_boltzmann_agents_meet",
+    "claim_two_agent_vae_unsettled", "vae_volatility",
     # figures
     "AGENT_COLORS", "CURIOSITY_LABEL", "EFFECT_COLORS", "FIGURES_DIRNAME", "POLICY_COLORS", "STEPS_LABEL", "TARGET_COLORS",
     "empty_axes", "figures_dir", "plot_action_histogram", "plot_boltzmann_greediness", "plot_claim_effects",

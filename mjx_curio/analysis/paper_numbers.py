@@ -1,0 +1,224 @@
+"""The paper's numbers beside ours: each number the paper reads off one of its figures (a
+curiosity level at some step, where a curve is lowest, a policy's contacts as a share of UCB's),
+measured the same way on the sweeps, as a mean over seeds with its 95% CI.
+
+    from mjx_curio import analysis as an
+    print(an.paper_numbers_table("runs/paper").to_markdown())
+
+The paper reads each number from one run, most of them from a curve smoothed over 50 points of 20
+steps (1,000 steps). Here every run becomes such a curve the same way for every source
+(`run_curves`: the curiosity, the mean of the agents, in bins of 1,000 steps; the contacts summed
+from the start), so a sweep's metrics and a reduced full-length sweep (the `curves` of
+docs/results/full_length.json) are measured alike. The paper's runs are 80,000 steps long; a
+reading about a later part of the run than a sweep reached is left out for that sweep ("—").
+Imports `claims`, `stats`, `sweeps` and `tables`.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from typing import Mapping
+
+import numpy as np
+
+from mjx_curio.analysis.claims import assign_presets, paper_group
+from mjx_curio.analysis.stats import agent_contacts, bin_windows, mean_ci, object_contacts
+from mjx_curio.analysis.sweeps import POLICY_LABELS, Sweep
+from mjx_curio.analysis.tables import Table
+
+BIN_STEPS = 1_000  # the paper's smoothing span: 50 points of 20 steps
+PAPER_STEPS = 80_000
+END_STEPS = 2_000  # "at the end": the last two bins
+
+
+def run_curves(sweep: Sweep, every: int = BIN_STEPS) -> dict:
+    """Per run, in bins of `every` steps: {"steps" [bins] (each bin's last step), "runs" the
+    curiosity (mean of the agents, NaN-skipping) [runs, bins], "object_contacts" and
+    "agent_contacts" the contact steps summed from the start [runs, bins]}. The `curves` of a
+    full-length sweep's JSON hold the same (there as lists)."""
+    steps, c = bin_windows(sweep, np.nanmean(sweep.metrics["curiosity"].astype(float), axis=2), every=every,
+                           reduce="mean")
+    out = {"steps": np.asarray(steps, int), "runs": c}
+    for key, counts in (("object_contacts", object_contacts(sweep)), ("agent_contacts", agent_contacts(sweep))):
+        _, binned = bin_windows(sweep, counts, every=every, reduce="sum")
+        out[key] = np.cumsum(binned, axis=1)
+    return out
+
+
+@dataclasses.dataclass(frozen=True)
+class Reading:
+    """One number the paper reads off a figure: where (`figure`, `preset`, `policy`), what, the
+    paper's words, and how to measure it (`measure` names a function of `MEASURES`, `args` its
+    arguments after the curves and the group's runs)."""
+
+    figure: str
+    preset: str
+    policy: str
+    what: str
+    paper: str
+    measure: str
+    args: tuple = ()
+
+
+READINGS = (
+    Reading("fig. 8", "single_agent", "eps", "curiosity, steps 0-1,000", "close to 1", "level", (0, 1_000)),
+    Reading("fig. 8", "single_agent", "eps", "curiosity, steps 4,000-6,000", "about 0.55", "level", (4_000, 6_000)),
+    Reading("fig. 8", "single_agent", "eps", "curiosity, steps 10,000-15,000", "0.57-0.59", "level", (10_000, 15_000)),
+    Reading("fig. 8", "single_agent", "eps", "curiosity, the last 2,000 steps", "about 0.63 (at 80,000)", "end"),
+    Reading("fig. 17", "multi_agent", "eps", "curiosity, steps 0-1,000", "0.7", "level", (0, 1_000)),
+    Reading("fig. 17", "multi_agent", "eps", "lowest curiosity (1,000-step bins)", "about 0.53", "lowest"),
+    Reading("fig. 17", "multi_agent", "eps", "step of the lowest curiosity", "20,000-25,000", "lowest_step"),
+    Reading("fig. 17", "multi_agent", "eps", "curiosity, the last 2,000 steps", "over 0.6 (at 80,000)", "end"),
+    Reading("fig. 18", "multi_agent", "ucb", "curiosity, steps 0-1,000", "above 1", "level", (0, 1_000)),
+    Reading("fig. 18", "multi_agent", "ucb", "step of the lowest curiosity", "10,000-30,000", "lowest_step"),
+    Reading("fig. 18", "multi_agent", "ucb", "curiosity, steps 30,000-80,000", "0.65-0.70", "level", (30_000, 80_000)),
+    Reading("fig. 20", "multi_agent", "boltzmann", "curiosity, steps 15,000-35,000", "about 0.7", "level",
+            (15_000, 35_000)),
+    Reading("fig. 21", "multi_agent", "eps", "object contacts, % of UCB's", "about 50 %", "share_of_ucb",
+            ("object_contacts",)),
+    Reading("fig. 21", "multi_agent", "boltzmann", "object contacts, % of UCB's", "about 15 %", "share_of_ucb",
+            ("object_contacts",)),
+    Reading("fig. 21", "multi_agent", "ucb", "% of the run's object contacts made by step 40,000", "60 %", "share_by",
+            ("object_contacts", 40_000)),
+    Reading("fig. 21", "multi_agent", "boltzmann", "runs touching an object after step 30,000", "none", "touching_after",
+            ("object_contacts", 30_000)),
+    Reading("fig. 22", "multi_agent", "eps", "agent-agent contacts, % of UCB's", "about 10 %", "share_of_ucb",
+            ("agent_contacts",)),
+    Reading("fig. 22", "multi_agent", "boltzmann", "agent-agent contacts, % of UCB's", "about 50 %", "share_of_ucb",
+            ("agent_contacts",)),
+)
+
+
+# ------------------------------------------------------------------------------- the measures
+# Each takes the curves (`run_curves`), the runs of the reading's group and of the same sweep's
+# UCB group, and its arguments; it returns (cell text, number) or None where the sweep's runs are
+# too short for it.
+
+
+def _steps(cv) -> np.ndarray:
+    return np.asarray(cv["steps"], int)
+
+
+def _mean_cell(x, digits: int = 3, unit: str = "") -> tuple[str, float]:
+    m, lo, hi, _ = mean_ci(np.asarray(x, float))
+    return f"{m:.{digits}g}{unit} [{lo:.{digits}g}, {hi:.{digits}g}]", float(m)
+
+
+def _level(cv, runs, ucb, start, end):
+    steps = _steps(cv)
+    if steps[-1] < end:
+        return None
+    bins = (steps > start) & (steps <= end)
+    return _mean_cell(np.nanmean(np.asarray(cv["runs"], float)[np.ix_(runs, bins)], axis=1))
+
+
+def _end(cv, runs, ucb):
+    steps = _steps(cv)
+    return _level(cv, runs, ucb, int(steps[-1]) - END_STEPS, int(steps[-1]))
+
+
+def _lowest_bins(cv, runs) -> tuple[np.ndarray, np.ndarray] | None:
+    """Each run's lowest binned curiosity after the first bin, and the middle step of its bin
+    (NaN for a run with no finite bin there); None for curves of fewer than two bins."""
+    steps = _steps(cv)
+    if len(steps) < 2:
+        return None
+    c = np.asarray(cv["runs"], float)[np.ix_(runs, np.arange(1, len(steps)))]
+    some = np.isfinite(c).any(axis=1)
+    i = np.nanargmin(np.where(some[:, None], c, 0.0), axis=1)
+    middle = steps[1:][i] - (steps[1] - steps[0]) / 2
+    return np.where(some, c[np.arange(len(runs)), i], np.nan), np.where(some, middle, np.nan)
+
+
+def _lowest(cv, runs, ucb):
+    lowest = _lowest_bins(cv, runs)
+    return None if lowest is None else _mean_cell(lowest[0])
+
+
+def _lowest_step(cv, runs, ucb):
+    lowest = _lowest_bins(cv, runs)
+    if lowest is None:
+        return None
+    at = lowest[1]
+    m, lo, hi, _ = mean_ci(at)
+    return f"{m:,.0f} [{lo:,.0f}, {hi:,.0f}] (runs: {np.nanmin(at):,.0f}-{np.nanmax(at):,.0f})", float(m)
+
+
+def _share_of_ucb(cv, runs, ucb, key):
+    total = np.asarray(cv[key], float)[:, -1]
+    top = total[ucb].mean()
+    if not top > 0:
+        return None
+    return _mean_cell(100 * total[runs] / top, unit=" %")
+
+
+def _share_by(cv, runs, ucb, key, step):
+    steps = _steps(cv)
+    if steps[-1] <= step or step not in steps:
+        return None
+    cum = np.asarray(cv[key], float)[runs]
+    with np.errstate(invalid="ignore", divide="ignore"):
+        share = 100 * cum[:, list(steps).index(step)] / cum[:, -1]  # NaN for a run that never touched
+    return _mean_cell(share, unit=" %")
+
+
+def _touching_after(cv, runs, ucb, key, step):
+    steps = _steps(cv)
+    if steps[-1] <= step or step not in steps:
+        return None
+    cum = np.asarray(cv[key], float)[runs]
+    k = int((cum[:, -1] - cum[:, list(steps).index(step)] > 0).sum())
+    return f"{k} of {len(runs)}", float(k)
+
+
+MEASURES = {"level": _level, "end": _end, "lowest": _lowest, "lowest_step": _lowest_step,
+            "share_of_ucb": _share_of_ucb, "share_by": _share_by, "touching_after": _touching_after}
+
+
+def reading_value(reading: Reading, curves: Mapping, groups: Mapping[str, list]):
+    """`reading` measured on `curves` (`run_curves`, or a full-length JSON's) whose runs of each
+    policy are `groups` ({policy: run indices}): (cell text, number), or None where the runs are
+    too short for it or lack the policy."""
+    if reading.policy not in groups or "ucb" not in groups:
+        return None
+    return MEASURES[reading.measure](curves, list(groups[reading.policy]), list(groups["ucb"]), *reading.args)
+
+
+def paper_numbers_table(sweeps, full_length: Mapping[str, tuple[Mapping, Mapping]] | None = None,
+                        full_length_label: str = "80,000 steps", label: str = "the sweeps") -> Table:
+    """One row per reading of `READINGS`: the figure, the setting, what is read, the paper's
+    number, and ours on the preset sweeps (`sweeps`, as `claims.assign_presets` takes them; each
+    preset's group in the paper's setting; the column headed `label`); with `full_length` ({preset:
+    (curves, {policy: run indices})}, e.g. from full_length.json), a column of the same on those
+    runs, headed `full_length_label`."""
+    presets = assign_presets(sweeps)
+    curves = {}
+    for name in dict.fromkeys(r.preset for r in READINGS):
+        s = presets.get(name)
+        if s is not None:
+            gs = {p: paper_group(s, p) for p in ("eps", "boltzmann", "ucb")}
+            curves[name] = (run_curves(s), {p: g.indices for p, g in gs.items() if g is not None}, s)
+    cols = ["figure", "setting", "what", "the paper (one run, 80,000 steps)", f"here: {label}"]
+    if full_length:
+        cols.append(f"here: {full_length_label}")
+    rows, values = [], []
+    for r in READINGS:
+        ours = curves.get(r.preset)
+        cell = reading_value(r, ours[0], ours[1]) if ours else None
+        long = full_length.get(r.preset) if full_length else None
+        cell_long = reading_value(r, *long) if long else None
+        agents = "one agent" if r.preset.startswith("single") else "two agents"
+        row = [r.figure, f"{agents}, {POLICY_LABELS[r.policy]}", r.what, r.paper, cell[0] if cell else "—"]
+        if full_length:
+            row.append(cell_long[0] if cell_long else "—")
+        rows.append(row)
+        values.append({"figure": r.figure, "preset": r.preset, "policy": r.policy, "what": r.what, "paper": r.paper,
+                       "ours": cell[1] if cell else None, "ours_long": cell_long[1] if cell_long else None})
+    sizes = "; ".join(f"{s.name}, {s.steps_done:,} steps, " + ", ".join(
+        f"{POLICY_LABELS[p]} {len(i)}" for p, i in g.items()) + " runs" for _, g, s in curves.values())
+    note = (f"Mean over runs [95 % CI]; every run's curiosity averaged over its agents and over bins of "
+            f"{BIN_STEPS:,} steps (the paper's smoothing span), the contacts summed from the start. The lowest "
+            f"curiosity: each run's lowest bin after the first; its step: the bin's middle. % of UCB's: each run's "
+            f"total over the mean total of the UCB runs. —: the runs are shorter than the reading needs. "
+            f"{label[0].upper() + label[1:]}: {sizes}.")
+    return Table(cols, rows, values, note)

@@ -1,0 +1,86 @@
+"""The paper's numbers beside ours (mjx_curio/analysis/paper_numbers.py): every run's curve in
+1,000-step bins against NumPy, and each reading measured on planted curves."""
+
+import numpy as np
+import pytest
+
+from mjx_curio import analysis as an
+from mjx_curio.analysis import paper_numbers as pn
+
+from test_claims import POLICIES, fake_sweep
+
+
+def test_run_curves_bin_the_windows_and_sum_the_contacts():
+    s = fake_sweep("multi_agent", 2, POLICIES, 150, seeds=2)  # 3,000 steps: three bins of 50 windows
+    rng = np.random.default_rng(0)
+    s.metrics["curiosity"][:] = rng.random(s.metrics["curiosity"].shape)
+    s.metrics["contact_object"][:, 60, 1, 2] = 3
+    s.metrics["contact_agent"][:, 120, :] = 2  # both agents see the same contact: counted once
+    cv = pn.run_curves(s)
+    assert cv["steps"].tolist() == [1000, 2000, 3000]
+    want = s.metrics["curiosity"].astype(float).mean(axis=2).reshape(6, 3, 50).mean(axis=2)
+    np.testing.assert_allclose(cv["runs"], want, rtol=1e-6)
+    assert cv["object_contacts"][0].tolist() == [0, 3, 3] and cv["agent_contacts"][0].tolist() == [0, 0, 2]
+
+
+def _curves(levels, bins=80):
+    """Planted curves of `bins` 1,000-step bins, one run a level function of the step (thousands)."""
+    steps = np.arange(1, bins + 1) * 1000
+    return {"steps": steps, "runs": np.array([[f(k) for k in steps / 1000] for f in levels])}
+
+
+def test_each_measure_on_planted_curves():
+    # Two runs of each policy; run r's curiosity is 0.5 + 0.1 r, except a dip to 0.2 in one bin.
+    dips = [12, 20]
+    cv = _curves([lambda k, r=r: 0.2 if k == dips[r % 2] else 0.5 + 0.1 * r for r in range(6)])
+    object_totals = np.array([50, 50, 10, 20, 100, 100])  # ε-greedy, Boltzmann, UCB
+    cv["object_contacts"] = np.outer(object_totals, cv["steps"] / 80_000)  # a steady rate
+    cv["object_contacts"][3, 40:] = cv["object_contacts"][3, 39]  # one Boltzmann run stops at 40,000
+    groups = {"eps": [0, 1], "boltzmann": [2, 3], "ucb": [4, 5]}
+
+    def value(measure, policy, *args):
+        return pn.reading_value(pn.Reading("fig. x", "multi_agent", policy, "", "", measure, args), cv, groups)
+
+    assert value("level", "eps", 30_000, 40_000)[1] == pytest.approx(0.55)  # runs at 0.5 and 0.6
+    assert value("end", "ucb")[1] == pytest.approx(0.95)
+    assert value("lowest", "eps")[1] == pytest.approx(0.2)
+    assert value("lowest_step", "eps")[1] == pytest.approx((11_500 + 19_500) / 2)  # the bins' middles
+    assert value("share_of_ucb", "eps", "object_contacts")[1] == pytest.approx(50.0)
+    assert value("share_of_ucb", "boltzmann", "object_contacts")[0] == "10 % [10, 10]"  # 10, and 20 stopped halfway
+    assert value("share_by", "ucb", "object_contacts", 40_000)[1] == pytest.approx(50.0)
+    assert value("touching_after", "boltzmann", "object_contacts", 30_000)[0] == "2 of 2"
+    assert value("touching_after", "boltzmann", "object_contacts", 50_000)[0] == "1 of 2"
+    # A run that diverged at once (every bin NaN) is left out of the lowest and its step.
+    halted = {**cv, "runs": cv["runs"].copy()}
+    halted["runs"][0] = np.nan
+    assert pn.reading_value(pn.Reading("", "", "eps", "", "", "lowest_step"), halted, groups)[0].startswith(
+        "19,500 [nan, nan] (runs: 19,500-19,500)")
+    # Runs of 40,000 steps: nothing about later steps.
+    short = {k: (v[:, :40] if k != "steps" else v[:40]) for k, v in cv.items()}
+    assert pn.reading_value(pn.Reading("", "", "ucb", "", "", "level", (30_000, 80_000)), short, groups) is None
+    assert pn.reading_value(pn.Reading("", "", "ucb", "", "", "share_by", ("object_contacts", 40_000)),
+                            short, groups) is None
+    assert pn.reading_value(pn.Reading("", "", "ucb", "", "", "level", (0, 1_000)), cv, {"ucb": [4]})[1] == 0.9
+
+
+def test_the_table_on_planted_sweeps_and_full_length_curves():
+    single = fake_sweep("single_agent", 1, POLICIES, 2000, seeds=3)
+    multi = fake_sweep("multi_agent", 2, POLICIES, 2000, seeds=3)
+    single.metrics["curiosity"][:] = 0.4
+    multi.metrics["curiosity"][:] = 0.3
+    t = an.paper_numbers_table({"single_agent": single, "multi_agent": multi})
+    assert len(t.rows) == len(pn.READINGS) and len(t.columns) == 5
+    rows = {(r[0], r[2]): r for r in t.rows}
+    assert rows["fig. 8", "curiosity, steps 0-1,000"][4] == "0.4 [0.4, 0.4]"
+    assert rows["fig. 18", "curiosity, steps 30,000-80,000"][4] == "—"  # 40,000-step runs
+    assert rows["fig. 21", "object contacts, % of UCB's"][4] == "—"  # no UCB contacts to compare with
+    cv = _curves([lambda k: 0.6] * 9)
+    cv["object_contacts"] = cv["agent_contacts"] = np.outer(np.arange(1, 10), cv["steps"] / 1000)
+    long = {"multi_agent": (cv, {"eps": [0, 1, 2], "boltzmann": [3, 4, 5], "ucb": [6, 7, 8]})}
+    t = an.paper_numbers_table({"single_agent": single, "multi_agent": multi}, long, "80,000 steps, planted")
+    assert t.columns[-1] == "here: 80,000 steps, planted"
+    rows = {(r[0], r[2]): r for r in t.rows}
+    assert rows["fig. 18", "curiosity, steps 30,000-80,000"][5] == "0.6 [0.6, 0.6]"
+    assert rows["fig. 8", "curiosity, steps 0-1,000"][5] == "—"  # no one-agent run of that length
+    assert rows["fig. 21", "% of the run's object contacts made by step 40,000"][5] == "50 % [50, 50]"
+    assert t.values[0]["ours"] == pytest.approx(0.4) and t.values[0]["ours_long"] is None
