@@ -88,6 +88,10 @@
 # 56 min alone on the Intel Xeon above, 44-51 run-steps/s):
 #     python -m mjx_curio.sweep preset=single_agent policies=boltzmann seeds=4 steps=40000 checkpoint_every=1000 out=runs/paper/single_agent.spread_boltzmann
 #     python experiments/spread_evidence.py runs/paper/single_agent.spread_boltzmann
+# On the last four, the curiosity from a zero memory carry, as the authors' code logs it (about
+# 45 s a run beside a running sweep; docs/results/history.json, under "The paper's numbers beside
+# ours"):
+#     python experiments/history_evidence.py runs/paper/multi_agent.spread   # and the other three
 # The same side experiment with the posterior mean as the latent (z=mean, not the paper's
 # setting: the curiosity is then the world model's error alone), 4 seeds x 40,000 steps (49 min
 # on the Intel Xeon above, 46-59 run-steps/s), not run by this script either:

@@ -19,7 +19,8 @@ page's `multi_agent.order` records the order of actions, which claim 6b needs an
 docs/results.md (between `<!-- generated: NAME -->` and `<!-- end: NAME -->`): the scale of the
 sweeps, the figures with their captions, the claims table (`analysis.claims_table`), the
 numbers the paper reads off its figures beside ours (`analysis.paper_numbers_table`, with a
-column for the full-length sweeps), the seeds each claim's tests need (`analysis.power_table`), claim 1's fall and rise taken apart
+column for the full-length sweeps) and the curiosity from a zero memory carry (from
+docs/results/history.json, which `history_evidence.py` writes), the seeds each claim's tests need (`analysis.power_table`), claim 1's fall and rise taken apart
 into the world model's error and the posterior's spread (`analysis.curiosity_parts_table`), the
 Boltzmann temperatures measure by measure (`analysis.temperature_table`), different walls against identical ones
 (`analysis.walls_table`) and the reconstructions' quality over training (from
@@ -29,8 +30,8 @@ writes, with their figures); the rest
 of the page (what the verdicts mean, why a claim may fail here) is prose and stays as written.
 The claims' numbers also go to docs/results/claims.csv, the walls table's to docs/results/walls.csv.
 
-`check` recomputes the scale, claims, paper's numbers, power, curiosity parts, temperatures, walls,
-reconstructions and full-length blocks from the committed results and exits 1 if they differ from the page (the
+`check` recomputes the scale, claims, paper's numbers, history, power, curiosity parts, temperatures,
+walls, reconstructions and full-length blocks from the committed results and exits 1 if they differ from the page (the
 test suite does the same).
 """
 
@@ -55,6 +56,7 @@ WALLS_CSV = ROOT / "docs" / "results" / "walls.csv"
 RECONSTRUCTIONS = ROOT / "docs" / "results" / "reconstructions.json"  # reconstruction_evidence.py writes it
 FULL_LENGTH = ROOT / "docs" / "results" / "full_length.json"  # full_length_evidence.py writes it
 POSTERIOR_DIMS = ROOT / "docs" / "results" / "posterior_dims.json"  # spread_evidence.py writes it
+HISTORY = ROOT / "docs" / "results" / "history.json"  # history_evidence.py writes it
 SNAPSHOT_FILES = ("manifest.json", "progress.json")  # plus metrics/*.npy
 DPI = 80
 
@@ -304,6 +306,33 @@ def reconstructions_block(path: pathlib.Path = RECONSTRUCTIONS) -> str:
         return "No sweep's reconstructions have been measured yet (`experiments/reconstruction_evidence.py`).\n"
     return "\n".join(f"{reconstructions_table(e)}\n![{name}_reconstructions](figures/{name}_reconstructions.png)\n"
                      for name, e in sorted(newest.items()))
+
+
+def history_table(entry: dict) -> str:
+    """Markdown of one entry of history.json: per group, means over its runs of the sweep's own
+    curiosity over the buffer's steps, the curiosity's expectation on those steps from the live
+    carry and from a zero carry, their difference (mean over runs [95 % CI]) and the spread."""
+    from mjx_curio import analysis as an
+
+    lines = [f"`{entry['sweep']}`, the networks of step {entry['replay_step']:,} on the replay buffer kept there "
+             f"({entry['runs'][0]['steps']:,} steps a run); means over runs:", "",
+             "| group | runs | curiosity (the sweep's metrics) | E[curiosity], the live carry | E[curiosity], a zero "
+             "carry | zero - live | posterior spread |", "|---|---|---|---|---|---|---|"]
+    for group in dict.fromkeys(r["group"] for r in entry["runs"]):
+        rs = [r for r in entry["runs"] if r["group"] == group]
+        col = {k: np.array([r[k] for r in rs], float) for k in ("logged", "live", "zero", "spread")}
+        d = an.mean_ci(col["zero"] - col["live"])
+        lines.append(f"| {group} | {len(rs)} | {col['logged'].mean():.3f} | {col['live'].mean():.3f} | "
+                     f"{col['zero'].mean():.3f} | {d[0]:+.3f} [{d[1]:+.3f}, {d[2]:+.3f}] | {col['spread'].mean():.3f} |")
+    return "\n".join(lines) + "\n"
+
+
+def history_block(path: pathlib.Path = HISTORY) -> str:
+    """Every entry of history.json (`history_table`), one table a sweep."""
+    entries = json.loads(path.read_text()) if path.exists() else []
+    if not entries:
+        return "No sweep's replay buffers have been evaluated from a zero carry yet (`experiments/history_evidence.py`).\n"
+    return "\n".join(history_table(e) for e in sorted(entries, key=lambda e: e["sweep"]))
 
 
 def _device(d: dict | list) -> str:
@@ -895,6 +924,7 @@ def computed_blocks(presets: dict) -> dict[str, str]:
     reconstructions.json for the reconstructions block (what `check` compares)."""
     return {"scale": scale_block(presets), "claims": claims_block(presets), "power": power_block(presets),
             "curiosity_parts": curiosity_parts_block(presets), "paper_numbers": paper_numbers_block(presets),
+            "history": history_block(),
             "temperatures": temperatures_block(presets), "walls": walls_block(presets),
             "reconstructions": reconstructions_block(), "full_length": full_length_block()}
 

@@ -390,6 +390,16 @@ def test_curiosity_noise(sweep, monkeypatch):
         assert cn.action_means()[5, agent] == pytest.approx(means[cn.taken[5, agent]], rel=1e-12)
     with pytest.raises(ValueError, match="window=1: want a whole number of steps >= 2"):
         cn.noise_share(1)
+    # From a zero carry: the same steps' E[c] without their history, in closed form.
+    zero = an.curiosity_noise(sweep, run, chunk=64, zero_state=True)
+    t = 57
+    blank = np.zeros_like(rp["carry"]["0"][run, t])
+    _, mix = wm.rnn_step(cfg, params["rnn"], (blank, blank), rp["latents"][run, t], rp["actions"][run, t])
+    mu, logvar = wm.encode(cfg, params["vae"], rp["frames"][run, t + 1])
+    want = (np.square(np.asarray(mu - wm.mixture_mean(mix), np.float64)) + np.exp(np.asarray(logvar, np.float64))).mean(-1)
+    np.testing.assert_allclose(zero.expected[t], want, rtol=1e-4)
+    np.testing.assert_array_equal(zero.spread, cn.spread)  # the posterior does not depend on the memory
+    assert not np.allclose(zero.expected, cn.expected)
 
     # Over the buffer's 200 views: the 199 that follow a step, and the first.
     spread = an.posterior_spread(sweep, run, every=1)

@@ -40,8 +40,8 @@ def test_the_page_is_what_the_committed_metrics_give(results):
     presets = results.load_presets()
     page = results.PAGE.read_text()
     blocks = results.blocks(page)
-    assert set(blocks) == {"scale", "figures", "claims", "paper_numbers", "power", "curiosity_parts", "temperatures",
-                           "walls", "reconstructions", "full_length"}
+    assert set(blocks) == {"scale", "figures", "claims", "paper_numbers", "history", "power", "curiosity_parts",
+                           "temperatures", "walls", "reconstructions", "full_length"}
     assert blocks["figures"] == results.figures_block(presets, out=None)
     if presets:  # the CSV's full-precision numbers may differ in the last bit on another CPU's NumPy
         _assert_same_csv(results.CLAIMS_CSV.read_text(), an.claims_table(presets).to_csv())
@@ -181,6 +181,36 @@ def test_spread_evidence_on_the_tiny_sweep(results, tiny_sweep, tmp_path, capsys
     block = results.curiosity_parts_block({}, dims=module.OUT)
     rows = [r for r in block.splitlines() if r.startswith("| ") and not r.startswith("| group")]
     assert len(rows) == len(sweep.groups()) and block.startswith("No sweep that records")
+
+
+def test_history_evidence_on_the_tiny_sweep(results, tiny_sweep, tmp_path, capsys):
+    """Every run's curiosity on its replay buffer from the live carry and from a zero carry is
+    `curiosity_noise`'s each way, the sweep's own curiosity is taken over the buffer's steps, and
+    the page's block shows one row per group. Bad input writes nothing."""
+    spec = importlib.util.spec_from_file_location("mjx_curio_history_evidence", ROOT / "experiments" / "history_evidence.py")
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    module.OUT = tmp_path / "out" / "history.json"
+    assert module.main([str(tmp_path / "nowhere")]) == 2 and "does not exist" in capsys.readouterr().err
+    metrics_only = _copy_sweep(tiny_sweep, tmp_path / "metrics_only")
+    assert module.main([str(metrics_only)]) == 2 and "history_evidence.py:" in capsys.readouterr().err
+    assert not (tmp_path / "out").exists()
+    entry = module.evidence(str(tiny_sweep))
+    sweep = an.load(tiny_sweep)
+    assert [r["run"] for r in entry["runs"]] == [r.name for r in sweep.runs] and entry["replay_step"] == 200
+    for i in (0, sweep.n_runs - 1):
+        live, zero = an.curiosity_noise(sweep, i), an.curiosity_noise(sweep, i, zero_state=True)
+        got = entry["runs"][i]
+        assert got["live"] == pytest.approx(live.expected.mean(), rel=1e-9)
+        assert got["zero"] == pytest.approx(zero.expected.mean(), rel=1e-9)
+        assert got["spread"] == pytest.approx(live.spread.mean(), rel=1e-9) and got["steps"] == 199
+        # The buffer holds the run's 200 steps: every window of the metrics.
+        assert got["logged"] == pytest.approx(np.nanmean(sweep.metrics["curiosity"][i]), rel=1e-6)
+    assert json.loads(module.OUT.read_text()) == [entry]
+    block = results.history_block(module.OUT)
+    rows = [r for r in block.splitlines() if r.startswith("| ") and not r.startswith("| group")]
+    assert len(rows) == len(sweep.groups())
+    assert results.history_block(tmp_path / "none.json").startswith("No sweep's replay buffers")
 
 
 def test_reconstruction_evidence_policies_and_paired_test_on_planted_numbers(tiny_sweep):

@@ -125,10 +125,14 @@ def _evaluate(cfg):
     return jax.jit(jax.vmap(one, in_axes=(None, 0, 0, 0, 0, 0)))
 
 
-def curiosity_noise(sweep: Sweep, run: int | str = 0, step: int | None = None, chunk: int = 500) -> CuriosityNoise:
+def curiosity_noise(sweep: Sweep, run: int | str = 0, step: int | None = None, chunk: int = 500,
+                    zero_state: bool = False) -> CuriosityNoise:
     """Run `run`'s networks restored from checkpoint `step` (default: the newest that kept its
     replay buffer), evaluated on every pair of consecutive steps in that buffer, in time order (the
-    buffer is a ring), `chunk` steps at a time."""
+    buffer is a ring), `chunk` steps at a time. `zero_state`: the memory (and the self-models'
+    view of it) starts each step from a zero carry instead of the one the agents acted with, as
+    the authors' code computes the curiosity it logs (README, Fidelity): the same steps without
+    their history."""
     if not (isinstance(chunk, (int, np.integer)) and chunk >= 1):
         raise ValueError(f"chunk={chunk!r}: want a whole number of steps >= 1")
     r = sweep.run(run)
@@ -143,6 +147,8 @@ def curiosity_noise(sweep: Sweep, run: int | str = 0, step: int | None = None, c
     params = sweep.params(step, i)
     f = _evaluate(sweep.learner_config())
     c, h = rp["carry"]["0"][i], rp["carry"]["1"][i]
+    if zero_state:
+        c, h = np.zeros_like(c), np.zeros_like(h)
     z, a, frames = rp["latents"][i], rp["actions"][i], rp["frames"][i]
     n = len(now)
     pad = -n % chunk  # every chunk the same shape: one compilation
