@@ -1,4 +1,5 @@
-"""The command line the one-sweep evidence scripts share: `python experiments/<script>.py <sweep>`.
+"""What the evidence scripts share: their command line, `python experiments/<script>.py <sweep>`
+(`one_sweep_main`), and the JSON list of entries each keeps under docs/results/ (`save_entry`).
 
 Bad input (not one argument, no such sweep, no checkpoints or replay buffers) is a one-line
 message and exit status 2, before anything is written.
@@ -6,6 +7,8 @@ message and exit status 2, before anything is written.
 
 from __future__ import annotations
 
+import json
+import pathlib
 import sys
 from typing import Callable
 
@@ -24,3 +27,16 @@ def one_sweep_main(script: str, doc: str, evidence: Callable[[str], object], arg
         print(f"{script}: {err}", file=sys.stderr)
         return 2
     return 0
+
+
+def save_entry(path: pathlib.Path, entry: dict, keys: tuple[str, ...] = ("sweep",), indent: int = 1) -> None:
+    """Add `entry` to the JSON list at `path` (made where missing), replacing an earlier entry with
+    the same values of `keys`, the list sorted by them: a script run again on a sweep updates that
+    sweep's entry and keeps the others."""
+    def key(e: dict) -> tuple:
+        return tuple(e[k] for k in keys)
+
+    saved = json.loads(path.read_text()) if path.exists() else []
+    saved = [e for e in saved if key(e) != key(entry)] + [entry]
+    path.parent.mkdir(parents=True, exist_ok=True)
+    path.write_text(json.dumps(sorted(saved, key=key), indent=indent) + "\n")

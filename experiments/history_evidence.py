@@ -21,7 +21,6 @@ numbers beside ours" (a Markdown table, one row per group).
 
 from __future__ import annotations
 
-import json
 import pathlib
 import sys
 
@@ -50,13 +49,11 @@ def evidence(path: str) -> dict:
                      "spread": float(live.spread.mean()),
                      "logged": float(np.nanmean(sweep.metrics["curiosity"][i][recent]))})
     entry = {"sweep": sweep.name, "replay_step": step, "runs": runs}
-    saved = json.loads(OUT.read_text()) if OUT.exists() else []
-    saved = [e for e in saved if e["sweep"] != entry["sweep"]] + [entry]
-    OUT.parent.mkdir(parents=True, exist_ok=True)
-    OUT.write_text(json.dumps(sorted(saved, key=lambda e: e["sweep"]), indent=1) + "\n")
     sys.path.insert(0, str(pathlib.Path(__file__).resolve().parent))
     import results  # the page's own table of an entry
+    from evidence_cli import save_entry
 
+    save_entry(OUT, entry)
     print(results.history_table(entry))
     print(f"wrote {OUT}")
     return entry

@@ -70,11 +70,10 @@ def staleness(path: str) -> dict:
                            "fresh_sample": summary["fresh_sample_vs_current"] / summary["spread"],
                            "stored_older_half": summary["stored_vs_current_older_half"] / summary["spread"],
                            "stored_newer_half": summary["stored_vs_current_newer_half"] / summary["spread"]}}
-    out = DOCS / "latents" / "staleness.json"
-    out.parent.mkdir(parents=True, exist_ok=True)
-    saved = json.loads(out.read_text()) if out.exists() else []
-    saved = [e for e in saved if not (e["sweep"] == result["sweep"] and e["step"] == step)] + [result]
-    out.write_text(json.dumps(sorted(saved, key=lambda e: (e["sweep"], e["step"])), indent=2) + "\n")
+    sys.path.insert(0, str(pathlib.Path(__file__).resolve().parent))
+    from evidence_cli import save_entry
+
+    save_entry(DOCS / "latents" / "staleness.json", result, keys=("sweep", "step"), indent=2)
     print(json.dumps({"step": step, **result["relative"]}, indent=1))
     return result
 

@@ -23,7 +23,6 @@ docs/results.md (a Markdown table, one row per checkpoint).
 
 from __future__ import annotations
 
-import json
 import math
 import pathlib
 import sys
@@ -108,10 +107,11 @@ def evidence(path: str) -> dict:
              "frames_per_run": q.frames_per_run, "heldout_frames_per_vae": int(
                  (sweep.n_runs - 1) * q.frames_per_run * sweep.n_agents),
              "image": sweep.image, "steps": q.steps, "summary": summary, "runs": runs}
-    saved = json.loads(OUT.read_text()) if OUT.exists() else []
-    saved = [e for e in saved if (e["sweep"], e["step"]) != (entry["sweep"], entry["step"])] + [entry]
-    OUT.parent.mkdir(parents=True, exist_ok=True)
-    OUT.write_text(json.dumps(sorted(saved, key=lambda e: (e["sweep"], e["step"])), indent=2) + "\n")
+    sys.path.insert(0, str(pathlib.Path(__file__).resolve().parent))
+    import results  # the page's own table of an entry
+    from evidence_cli import save_entry
+
+    save_entry(OUT, entry, keys=("sweep", "step"), indent=2)
 
     shown = list(dict.fromkeys([q.steps[0]] + [s for s in q.steps if s == FIGURE_STEP] + [q.steps[-1]]))
     fig = plt.figure(figsize=(9.0, 1.0 + 1.25 * len(shown)))
@@ -119,9 +119,6 @@ def evidence(path: str) -> dict:
     fig.subplots_adjust(left=0.07, right=0.99, bottom=0.02, top=0.8, wspace=0.08, hspace=0.12)  # the title on top
     figure = FIGURES / f"{sweep.name}_reconstructions.png"
     fig.savefig(figure, dpi=110)
-    sys.path.insert(0, str(pathlib.Path(__file__).resolve().parent))
-    import results  # the page's own table of an entry
-
     print(results.reconstructions_table(entry))
     print(f"wrote {OUT} and {figure}")
     return entry

@@ -19,7 +19,6 @@ entry of the same sweep and step) and prints a Markdown table, one row per polic
 
 from __future__ import annotations
 
-import json
 import pathlib
 import sys
 
@@ -54,10 +53,10 @@ def evidence(path: str) -> dict:
         r["r_self_obtained_late"] = float(np.tanh(tracked["self_late"][i])) if tracked is not None else None
         r["r_actions_obtained_late"] = float(np.tanh(tracked["base_late"][i])) if tracked is not None else None
     entry = {"sweep": sweep.name, "step": step, "window": WINDOW, "runs": runs}
-    saved = json.loads(OUT.read_text()) if OUT.exists() else []
-    saved = [e for e in saved if (e["sweep"], e["step"]) != (entry["sweep"], step)] + [entry]
-    OUT.parent.mkdir(parents=True, exist_ok=True)
-    OUT.write_text(json.dumps(sorted(saved, key=lambda e: (e["sweep"], e["step"])), indent=2) + "\n")
+    sys.path.insert(0, str(pathlib.Path(__file__).resolve().parent))
+    from evidence_cli import save_entry
+
+    save_entry(OUT, entry, keys=("sweep", "step"), indent=2)
     print(table(entry))
     print(f"wrote {OUT}")
     return entry

@@ -21,7 +21,6 @@ ones keep theirs), and prints Markdown tables, one row per temperature.
 
 from __future__ import annotations
 
-import json
 import pathlib
 import sys
 
@@ -79,10 +78,10 @@ def evidence(path: str) -> dict:
     step = values[0].step
     entry = {"sweep": sweep.name, "step": step, "uniform_prob": 1 / len(sweep.actions),
              "runs": [run_figures(v) for v in values], "metrics": metrics_figures(sweep)}
-    saved = json.loads(OUT.read_text()) if OUT.exists() else []
-    saved = [e for e in saved if (e["sweep"], e["step"]) != (entry["sweep"], step)] + [entry]
-    OUT.parent.mkdir(parents=True, exist_ok=True)
-    OUT.write_text(json.dumps(sorted(saved, key=lambda e: (e["sweep"], e["step"])), indent=2) + "\n")
+    sys.path.insert(0, str(pathlib.Path(__file__).resolve().parent))
+    from evidence_cli import save_entry
+
+    save_entry(OUT, entry, keys=("sweep", "step"), indent=2)
     fig, ax = plt.subplots(figsize=(7.5, 4.2))
     an.plot_boltzmann_greediness(sweep, ax, values=values)
     fig.tight_layout()

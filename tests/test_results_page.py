@@ -183,6 +183,19 @@ def test_spread_evidence_on_the_tiny_sweep(results, tiny_sweep, tmp_path, capsys
     assert len(rows) == len(sweep.groups()) and block.startswith("No sweep that records")
 
 
+def test_evidence_entries_are_replaced_by_key_and_kept_sorted(tmp_path):
+    spec = importlib.util.spec_from_file_location("mjx_curio_evidence_cli", ROOT / "experiments" / "evidence_cli.py")
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    path = tmp_path / "deep" / "entries.json"
+    for sweep, step, value in (("b", 2, 1), ("a", 5, 2), ("b", 1, 3), ("b", 2, 4)):
+        module.save_entry(path, {"sweep": sweep, "step": step, "value": value}, keys=("sweep", "step"))
+    assert json.loads(path.read_text()) == [{"sweep": "a", "step": 5, "value": 2}, {"sweep": "b", "step": 1, "value": 3},
+                                            {"sweep": "b", "step": 2, "value": 4}]
+    module.save_entry(path, {"sweep": "b", "step": 9, "value": 5})  # by sweep alone: every "b" entry replaced
+    assert [e["value"] for e in json.loads(path.read_text())] == [2, 5]
+
+
 def test_history_evidence_on_the_tiny_sweep(results, tiny_sweep, tmp_path, capsys):
     """Every run's curiosity on its replay buffer from the live carry and from a zero carry is
     `curiosity_noise`'s each way, the sweep's own curiosity is taken over the buffer's steps, and
