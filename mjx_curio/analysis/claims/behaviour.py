@@ -153,6 +153,7 @@ def agent_contact_order(contacts: Mapping[str, np.ndarray]) -> dict:
     return {"text": text, "values": values, "tested": Tested(contacts["boltzmann"], contacts["eps"]),
             "verdict": _decide([], fails, "Welch p < 0.05, Boltzmann > ε-greedy")}
 
+
 MOVING_OBJECTS = ("sphere", "cylinder")
 
 
