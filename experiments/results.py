@@ -443,19 +443,66 @@ def _policy_groups(groups: dict) -> dict:
     return {policy[label.split(" (")[0]]: idx for label, idx in groups.items()}
 
 
+def _full_length_curves(path: pathlib.Path = FULL_LENGTH) -> tuple[dict, str]:
+    """full_length.json's runs as `analysis.paper_numbers_table` takes them, {preset: (curves,
+    {policy: run indices})}, and a label naming them; ({}, "") where there is none."""
+    if not path.exists():
+        return {}, ""
+    sweeps = json.loads(path.read_text())["sweeps"]
+    long = {e["preset"]: (e["curves"]["long"], _policy_groups(e["curves"]["groups"])) for e in sweeps}
+    return long, " and ".join(f"`{e['sweep']}`, {e['steps']:,} steps on {_device(e['device'])}" for e in sweeps)
+
+
+PAPER_READINGS = "paper_readings"
+PAPER_READINGS_PANELS = (("fig. 8", "single_agent", "eps"), ("fig. 17", "multi_agent", "eps"),
+                         ("fig. 18", "multi_agent", "ucb"), ("fig. 20", "multi_agent", "boltzmann"))
+
+
 def paper_numbers_block(presets: dict, path: pathlib.Path = FULL_LENGTH) -> str:
     """The paper's numbers beside ours (`analysis.paper_numbers_table`): on the committed runs, and
-    on the full-length runs of full_length.json where it exists."""
+    on the full-length runs of full_length.json where it exists; then the figure of the curiosity
+    readings (`paper_readings_figure`)."""
     from mjx_curio import analysis as an
 
     if not presets:
         return "No snapshot has been committed yet.\n"
-    long, label = {}, "80,000 steps"
-    if path.exists():
-        sweeps = json.loads(path.read_text())["sweeps"]
-        long = {e["preset"]: (e["curves"]["long"], _policy_groups(e["curves"]["groups"])) for e in sweeps}
-        label = " and ".join(f"`{e['sweep']}`, {e['steps']:,} steps on {_device(e['device'])}" for e in sweeps)
-    return an.paper_numbers_table(presets, long, label, label="the committed runs").to_markdown()
+    long, label = _full_length_curves(path)
+    md = an.paper_numbers_table(presets, long, label or "80,000 steps", label="the committed runs").to_markdown()
+    return md + (f"\n![{PAPER_READINGS}](figures/results/{PAPER_READINGS}.png)\n\n*The curiosity of the paper's "
+                 "figs. 8, 17, 18 and 20 beside what the paper says of them: the mean over runs of each run's curiosity "
+                 "(the mean of its agents) in bins of 1,000 steps, with its 95 % CI, for the committed runs and, "
+                 "with two agents, the full-length runs on the GPU; grey boxes: the paper's words (\"about 0.55\" "
+                 "around step 5,000), over the steps it puts them at.*\n")
+
+
+def paper_readings_figure(presets: dict, path: pathlib.Path = FULL_LENGTH, out: pathlib.Path = FIGURES) -> None:
+    """docs/figures/results/paper_readings.png: a panel a figure of `PAPER_READINGS_PANELS`
+    (`analysis.plot_paper_readings`), the committed runs and the full-length ones where they ran."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    from mjx_curio import analysis as an
+    from mjx_curio.analysis.claims import paper_group
+
+    long, _ = _full_length_curves(path)
+    panels = [(fig, preset, policy) for fig, preset, policy in PAPER_READINGS_PANELS if preset in presets]
+    if not panels:
+        return
+    figure, axes = plt.subplots(len(panels), 1, figsize=(8.0, 3.0 * len(panels)), squeeze=False)
+    for ax, (name, preset, policy) in zip(axes[:, 0], panels):
+        s = presets[preset]
+        g = paper_group(s, policy)
+        sources = [(f"{s.name}, {s.steps_done:,} steps", an.run_curves(s), g.indices)]
+        if preset in long and policy in long[preset][1]:
+            sources.append(("the full-length runs", long[preset][0], long[preset][1][policy]))
+        an.plot_paper_readings(ax, name, sources)
+        ax.set_title(f"{name}: {'one agent' if s.n_agents == 1 else 'two agents'}, {g.label}", fontsize=9)
+        ax.set_ylabel("curiosity reward")  # stacked panels: the long label would run into the next
+    figure.tight_layout()
+    an.save_figure(figure, out, PAPER_READINGS, dpi=DPI)
+    plt.close(figure)
 
 
 def _contact_timing(e: dict) -> list[str]:
@@ -936,6 +983,7 @@ def write_page(src: pathlib.Path = SNAPSHOTS) -> None:
     new = computed_blocks(presets)
     new["figures"] = figures_block(presets)
     claim_effects_figure(presets)
+    paper_readings_figure(presets)
     full_length_figure()
     PAGE.write_text(fill(PAGE.read_text(), new))
     CLAIMS_CSV.parent.mkdir(parents=True, exist_ok=True)

@@ -84,3 +84,21 @@ def test_the_table_on_planted_sweeps_and_full_length_curves():
     assert rows["fig. 8", "curiosity, steps 0-1,000"][5] == "—"  # no one-agent run of that length
     assert rows["fig. 21", "% of the run's object contacts made by step 40,000"][5] == "50 % [50, 50]"
     assert t.values[0]["ours"] == pytest.approx(0.4) and t.values[0]["ours_long"] is None
+
+
+def test_plot_paper_readings_draws_each_source_and_the_papers_boxes():
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    cv = _curves([lambda k: 0.4] * 3 + [lambda k: 0.5] * 3)
+    fig, ax = plt.subplots()
+    an.plot_paper_readings(ax, "fig. 8", [("ours", cv, [0, 1, 2]), ("longer", cv, [3, 4, 5])])
+    lines = [ln for ln in ax.get_lines() if len(ln.get_xdata()) == 80]
+    assert [ln.get_ydata().mean() for ln in lines] == pytest.approx([0.4, 0.5])
+    boxes = [r.box for r in pn.READINGS if r.figure == "fig. 8" and r.box]
+    outlines = [ln for ln in ax.get_lines() if len(ln.get_xdata()) == 5]
+    assert len(boxes) == 4 and [(ln.get_xdata()[0], ln.get_ydata()[0]) for ln in outlines] == [
+        (b[0], b[2]) for b in boxes]
+    plt.close(fig)

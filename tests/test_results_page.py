@@ -372,6 +372,17 @@ def test_contact_timing_of_a_full_length_sweep_from_planted_cumulative_curves(re
     assert results._contact_timing(short) == []
 
 
+def test_the_paper_readings_figure_has_a_panel_for_each_loaded_preset(results, tmp_path):
+    from test_claims import POLICIES, fake_sweep
+
+    single = fake_sweep("single_agent", 1, POLICIES, 100, seeds=3)
+    single.metrics["curiosity"][:] = 0.4
+    results.paper_readings_figure({"single_agent": single}, path=tmp_path / "none.json", out=tmp_path)
+    assert (tmp_path / f"{results.PAPER_READINGS}.png").is_file()  # save_figure refuses an empty panel
+    results.paper_readings_figure({}, path=tmp_path / "none.json", out=tmp_path / "nothing")
+    assert not (tmp_path / "nothing").exists()
+
+
 def test_claim_15_row_of_a_full_length_sweep_from_planted_cumulative_curves(results):
     # A full_length.json written before claim 15 existed: its row comes from the curves' last
     # points, each run's agent-agent contact steps, and says what the claim itself would.

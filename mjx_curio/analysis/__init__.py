@@ -27,6 +27,7 @@ Figure) it is given and returning it:
     plot_reconstructions           figs 7, 13: real views and VAE reconstructions, early vs late
     plot_boltzmann_greediness      how greedy softmax(q / T) is on the runs' states, over T (fig 19's why)
     plot_claim_effects             every test of the claims on one axis: effect / spread, 95% interval
+    plot_paper_readings            a curiosity figure's curve beside the numbers the paper reads off it
     plot_view_fractions            what each agent looks at over time (objects, other agent)
     plot_observational             curiosity in windows where an agent only watches the other act
     plot_losses                    the world model's training losses
@@ -53,7 +54,7 @@ sweeps, stats and tables; curiosity_parts claims, significance, stats, sweeps an
 temperatures claims, significance, stats and tables; power claims, significance and tables; walls
 claims, power, significance, stats, sweeps and tables; paper_numbers claims, stats, sweeps and
 tables; figures sweeps, stats, recon,
-action_values, curiosity_parts, self_model and temperatures):
+action_values, curiosity_parts, self_model, temperatures and paper_numbers):
 
     sweeps    loading: `load`, `find_sweeps`, `load_sweeps`, `merge_sweeps` (one experiment's seeds
               from several sweeps), `join_seed_parts` (every such experiment of a list merged),
@@ -204,6 +205,7 @@ from mjx_curio.analysis.figures import (
     plot_action_histogram,
     plot_boltzmann_greediness,
     plot_claim_effects,
+    plot_paper_readings,
     plot_cumulative_interactions,
     plot_curiosity,
     plot_curiosity_groups,
@@ -337,6 +339,7 @@ __all__ = [
     # figures
     "AGENT_COLORS", "CURIOSITY_LABEL", "EFFECT_COLORS", "FIGURES_DIRNAME", "POLICY_COLORS", "STEPS_LABEL", "TARGET_COLORS",
     "empty_axes", "figures_dir", "plot_action_histogram", "plot_boltzmann_greediness", "plot_claim_effects",
+    "plot_paper_readings",
     "plot_cumulative_interactions",
     "plot_curiosity", "plot_curiosity_groups", "plot_curiosity_parts", "plot_error_without_spread",
     "plot_interaction_frequency", "plot_losses", "plot_observational",

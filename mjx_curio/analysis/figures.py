@@ -2,8 +2,9 @@
 Axes (or Figure) it is given and returning it (the list is in the package docstring), the
 colours and labels they share, and saving figures and text under a sweep's `figures/`
 (`figures_dir`, `save_figure`, `save_text`, `empty_axes`, `slug`). matplotlib is imported only
-where a colour map is needed; imports `sweeps`, `stats`, `recon`, `action_values` and
-`temperatures` (`plot_claim_effects` takes the `power` table it draws).
+where a colour map is needed; imports `sweeps`, `stats`, `recon`, `action_values`,
+`temperatures` and, when drawn, `paper_numbers` (`plot_claim_effects` takes the `power` table it
+draws).
 """
 
 from __future__ import annotations
@@ -541,6 +542,30 @@ def plot_claim_effects(power, ax):
     ax.grid(True, axis="x", alpha=0.3)
     ax.grid(False, axis="y")
     return ax
+
+
+def plot_paper_readings(ax, figure: str, sources, readings=None):
+    """One of the paper's curiosity figures (`figure`, e.g. "fig. 8") beside what the paper reads
+    off it. `sources`: (label, curves as `paper_numbers.run_curves` gives them, the runs of the
+    figure's group) each, drawn as the mean over those runs of the binned curiosity with its 95% CI
+    band; `readings` (default `paper_numbers.READINGS`): those of `figure` with a `box`, drawn as
+    grey boxes where the paper puts its words ("about 0.55" around step 5,000)."""
+    from mjx_curio.analysis.paper_numbers import READINGS
+
+    boxes = [r for r in (READINGS if readings is None else readings) if r.figure == figure and r.box]
+    for k, (label, cv, runs) in enumerate(sources):
+        steps = np.asarray(cv["steps"], float)
+        mean, lo, hi, _ = mean_ci(np.asarray(cv["runs"], float)[list(runs)])
+        color = f"C{k}"
+        ax.plot(steps, mean, color=color, lw=1.4, label=f"{label} ({len(runs)} runs)")
+        _band(ax, steps, lo, hi, color)
+    for i, r in enumerate(boxes):
+        start, end, low, high = r.box
+        ax.fill_between([start, end], low, high, color="0.45", alpha=0.35, lw=0,
+                        label="the paper's reading" if i == 0 else None)
+        ax.plot([start, end, end, start, start], [low, low, high, high, low], color="0.3", lw=0.7)
+    return _finish(ax, f"{figure}: mean curiosity in 1,000-step bins, 95% CI; grey: the paper's words",
+                   STEPS_LABEL, CURIOSITY_LABEL)
 
 
 def _short_test(label: str) -> str:

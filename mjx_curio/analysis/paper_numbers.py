@@ -49,7 +49,9 @@ def run_curves(sweep: Sweep, every: int = BIN_STEPS) -> dict:
 class Reading:
     """One number the paper reads off a figure: where (`figure`, `preset`, `policy`), what, the
     paper's words, and how to measure it (`measure` names a function of `MEASURES`, `args` its
-    arguments after the curves and the group's runs)."""
+    arguments after the curves and the group's runs). `box`: for a curiosity level, the paper's
+    words as a box on its curve, (first step, last step, low, high), which
+    `figures.plot_paper_readings` draws."""
 
     figure: str
     preset: str
@@ -58,22 +60,32 @@ class Reading:
     paper: str
     measure: str
     args: tuple = ()
+    box: tuple | None = None
 
 
 READINGS = (
-    Reading("fig. 8", "single_agent", "eps", "curiosity, steps 0-1,000", "close to 1", "level", (0, 1_000)),
-    Reading("fig. 8", "single_agent", "eps", "curiosity, steps 4,000-6,000", "about 0.55", "level", (4_000, 6_000)),
-    Reading("fig. 8", "single_agent", "eps", "curiosity, steps 10,000-15,000", "0.57-0.59", "level", (10_000, 15_000)),
-    Reading("fig. 8", "single_agent", "eps", "curiosity, the last 2,000 steps", "about 0.63 (at 80,000)", "end"),
-    Reading("fig. 17", "multi_agent", "eps", "curiosity, steps 0-1,000", "0.7", "level", (0, 1_000)),
-    Reading("fig. 17", "multi_agent", "eps", "lowest curiosity (1,000-step bins)", "about 0.53", "lowest"),
+    Reading("fig. 8", "single_agent", "eps", "curiosity, steps 0-1,000", "close to 1", "level", (0, 1_000),
+            box=(0, 1_000, 0.95, 1.05)),
+    Reading("fig. 8", "single_agent", "eps", "curiosity, steps 4,000-6,000", "about 0.55", "level", (4_000, 6_000),
+            box=(4_000, 6_000, 0.53, 0.57)),
+    Reading("fig. 8", "single_agent", "eps", "curiosity, steps 10,000-15,000", "0.57-0.59", "level", (10_000, 15_000),
+            box=(10_000, 15_000, 0.57, 0.59)),
+    Reading("fig. 8", "single_agent", "eps", "curiosity, the last 2,000 steps", "about 0.63 (at 80,000)", "end",
+            box=(78_000, 80_000, 0.61, 0.65)),
+    Reading("fig. 17", "multi_agent", "eps", "curiosity, steps 0-1,000", "0.7", "level", (0, 1_000),
+            box=(0, 1_000, 0.68, 0.72)),
+    Reading("fig. 17", "multi_agent", "eps", "lowest curiosity (1,000-step bins)", "about 0.53", "lowest",
+            box=(20_000, 25_000, 0.51, 0.55)),
     Reading("fig. 17", "multi_agent", "eps", "step of the lowest curiosity", "20,000-25,000", "lowest_step"),
-    Reading("fig. 17", "multi_agent", "eps", "curiosity, the last 2,000 steps", "over 0.6 (at 80,000)", "end"),
-    Reading("fig. 18", "multi_agent", "ucb", "curiosity, steps 0-1,000", "above 1", "level", (0, 1_000)),
+    Reading("fig. 17", "multi_agent", "eps", "curiosity, the last 2,000 steps", "over 0.6 (at 80,000)", "end",
+            box=(78_000, 80_000, 0.60, 0.65)),
+    Reading("fig. 18", "multi_agent", "ucb", "curiosity, steps 0-1,000", "above 1", "level", (0, 1_000),
+            box=(0, 1_000, 1.0, 1.1)),
     Reading("fig. 18", "multi_agent", "ucb", "step of the lowest curiosity", "10,000-30,000", "lowest_step"),
-    Reading("fig. 18", "multi_agent", "ucb", "curiosity, steps 30,000-80,000", "0.65-0.70", "level", (30_000, 80_000)),
+    Reading("fig. 18", "multi_agent", "ucb", "curiosity, steps 30,000-80,000", "0.65-0.70", "level", (30_000, 80_000),
+            box=(30_000, 80_000, 0.65, 0.70)),
     Reading("fig. 20", "multi_agent", "boltzmann", "curiosity, steps 15,000-35,000", "about 0.7", "level",
-            (15_000, 35_000)),
+            (15_000, 35_000), box=(15_000, 35_000, 0.68, 0.72)),
     Reading("fig. 21", "multi_agent", "eps", "object contacts, % of UCB's", "about 50 %", "share_of_ucb",
             ("object_contacts",)),
     Reading("fig. 21", "multi_agent", "boltzmann", "object contacts, % of UCB's", "about 15 %", "share_of_ucb",
