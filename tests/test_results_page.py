@@ -139,32 +139,18 @@ def test_reconstructions_block_shows_each_sweeps_newest_entry(results, tmp_path)
 
 
 def test_reconstruction_evidence_refuses_a_sweep_without_checkpoints(tiny_sweep, tmp_path, capsys):
-    spec = importlib.util.spec_from_file_location("mjx_curio_reconstruction_evidence",
-                                                  ROOT / "experiments" / "reconstruction_evidence.py")
-    module = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(module)
+    module = _experiment("reconstruction_evidence")
     module.OUT, module.FIGURES = tmp_path / "out" / "reconstructions.json", tmp_path / "out"
-    assert module.main([str(tmp_path / "nowhere")]) == 2
-    assert "does not exist" in capsys.readouterr().err
-    metrics_only = _copy_sweep(tiny_sweep, tmp_path / "metrics_only")  # what a snapshot keeps
-    assert module.main([str(metrics_only)]) == 2
-    assert "reconstruction_evidence.py:" in capsys.readouterr().err
-    assert module.main([]) == 2 and "reconstruction_evidence.py runs/paper" in capsys.readouterr().err
-    assert not (tmp_path / "out").exists()  # nothing written
+    _refuses_bad_sweeps(module, "reconstruction_evidence.py", tiny_sweep, tmp_path, capsys)
 
 
 def test_spread_evidence_on_the_tiny_sweep(results, tiny_sweep, tmp_path, capsys):
     """Every run's posterior variance per dimension at every checkpoint, on the newest buffer's
     views: its mean is `posterior_spread`'s, the dimensions near the prior are counted from it, and
     the page's block shows one row per group. Bad input writes nothing."""
-    spec = importlib.util.spec_from_file_location("mjx_curio_spread_evidence", ROOT / "experiments" / "spread_evidence.py")
-    module = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(module)
+    module = _experiment("spread_evidence")
     module.OUT = tmp_path / "out" / "posterior_dims.json"
-    assert module.main([str(tmp_path / "nowhere")]) == 2 and "does not exist" in capsys.readouterr().err
-    metrics_only = _copy_sweep(tiny_sweep, tmp_path / "metrics_only")
-    assert module.main([str(metrics_only)]) == 2 and "spread_evidence.py:" in capsys.readouterr().err
-    assert not (tmp_path / "out").exists()
+    _refuses_bad_sweeps(module, "spread_evidence.py", tiny_sweep, tmp_path, capsys)
     entry = module.evidence(str(tiny_sweep))
     sweep = an.load(tiny_sweep)
     assert [r["run"] for r in entry["runs"]] == [r.name for r in sweep.runs]
@@ -184,9 +170,7 @@ def test_spread_evidence_on_the_tiny_sweep(results, tiny_sweep, tmp_path, capsys
 
 
 def test_evidence_entries_are_replaced_by_key_and_kept_sorted(tmp_path):
-    spec = importlib.util.spec_from_file_location("mjx_curio_evidence_cli", ROOT / "experiments" / "evidence_cli.py")
-    module = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(module)
+    module = _experiment("evidence_cli")
     path = tmp_path / "deep" / "entries.json"
     for sweep, step, value in (("b", 2, 1), ("a", 5, 2), ("b", 1, 3), ("b", 2, 4)):
         module.save_entry(path, {"sweep": sweep, "step": step, "value": value}, keys=("sweep", "step"))
@@ -200,14 +184,9 @@ def test_history_evidence_on_the_tiny_sweep(results, tiny_sweep, tmp_path, capsy
     """Every run's curiosity on its replay buffer from the live carry and from a zero carry is
     `curiosity_noise`'s each way, the sweep's own curiosity is taken over the buffer's steps, and
     the page's block shows one row per group. Bad input writes nothing."""
-    spec = importlib.util.spec_from_file_location("mjx_curio_history_evidence", ROOT / "experiments" / "history_evidence.py")
-    module = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(module)
+    module = _experiment("history_evidence")
     module.OUT = tmp_path / "out" / "history.json"
-    assert module.main([str(tmp_path / "nowhere")]) == 2 and "does not exist" in capsys.readouterr().err
-    metrics_only = _copy_sweep(tiny_sweep, tmp_path / "metrics_only")
-    assert module.main([str(metrics_only)]) == 2 and "history_evidence.py:" in capsys.readouterr().err
-    assert not (tmp_path / "out").exists()
+    _refuses_bad_sweeps(module, "history_evidence.py", tiny_sweep, tmp_path, capsys)
     entry = module.evidence(str(tiny_sweep))
     sweep = an.load(tiny_sweep)
     assert [r["run"] for r in entry["runs"]] == [r.name for r in sweep.runs] and entry["replay_step"] == 200
@@ -230,10 +209,7 @@ def test_reconstruction_evidence_policies_and_paired_test_on_planted_numbers(tin
     """Planted errors: run i's VAE on run j's views costs 100 * (i's group) + (j's group); the
     per-policy table must average exactly the pairs of other runs, and the paired test must be
     Student's t on the differences."""
-    spec = importlib.util.spec_from_file_location("mjx_curio_reconstruction_evidence2",
-                                                  ROOT / "experiments" / "reconstruction_evidence.py")
-    module = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(module)
+    module = _experiment("reconstruction_evidence")  # a fresh module: no OUT set by another test
     sweep = an.load(tiny_sweep)
     groups = sweep.groups()
     gid = np.empty(sweep.n_runs, int)
@@ -262,11 +238,26 @@ def test_reconstruction_evidence_policies_and_paired_test_on_planted_numbers(tin
 
 
 def _full_length_module():
-    spec = importlib.util.spec_from_file_location("mjx_curio_full_length_evidence",
-                                                  ROOT / "experiments" / "full_length_evidence.py")
+    return _experiment("full_length_evidence")
+
+
+def _experiment(name: str):
+    """experiments/<name>.py loaded as a module of its own."""
+    spec = importlib.util.spec_from_file_location(f"mjx_curio_{name}", ROOT / "experiments" / f"{name}.py")
     module = importlib.util.module_from_spec(spec)
     spec.loader.exec_module(module)
     return module
+
+
+def _refuses_bad_sweeps(module, script: str, tiny_sweep, tmp_path, capsys) -> None:
+    """An evidence script's command line: no such sweep, a sweep without checkpoints (what a
+    snapshot keeps) and no argument are each one line on stderr and status 2, and nothing is
+    written under tmp_path/out."""
+    assert module.main([str(tmp_path / "nowhere")]) == 2 and "does not exist" in capsys.readouterr().err
+    metrics_only = _copy_sweep(tiny_sweep, tmp_path / "metrics_only")
+    assert module.main([str(metrics_only)]) == 2 and f"{script}:" in capsys.readouterr().err
+    assert module.main([]) == 2 and f"{script} runs/paper" in capsys.readouterr().err
+    assert not (tmp_path / "out").exists()
 
 
 def test_the_committed_full_length_numbers_are_what_their_runs_give(results):
