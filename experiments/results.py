@@ -454,8 +454,6 @@ def _full_length_curves(path: pathlib.Path = FULL_LENGTH) -> tuple[dict, str]:
 
 
 PAPER_READINGS = "paper_readings"
-PAPER_READINGS_PANELS = (("fig. 8", "single_agent", "eps"), ("fig. 17", "multi_agent", "eps"),
-                         ("fig. 18", "multi_agent", "ucb"), ("fig. 20", "multi_agent", "boltzmann"))
 
 
 def paper_numbers_block(presets: dict, path: pathlib.Path = FULL_LENGTH) -> str:
@@ -476,32 +474,20 @@ def paper_numbers_block(presets: dict, path: pathlib.Path = FULL_LENGTH) -> str:
 
 
 def paper_readings_figure(presets: dict, path: pathlib.Path = FULL_LENGTH, out: pathlib.Path = FIGURES) -> None:
-    """docs/figures/results/paper_readings.png: a panel a figure of `PAPER_READINGS_PANELS`
-    (`analysis.plot_paper_readings`), the committed runs and the full-length ones where they ran."""
+    """docs/figures/results/paper_readings.png: a panel for each curiosity figure with readings
+    (`analysis.plot_paper_readings_panels`), the committed runs and the full-length ones where they ran."""
     import matplotlib
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
     from mjx_curio import analysis as an
-    from mjx_curio.analysis.claims import paper_group
 
     long, _ = _full_length_curves(path)
-    panels = [(fig, preset, policy) for fig, preset, policy in PAPER_READINGS_PANELS if preset in presets]
-    if not panels:
-        return
-    figure, axes = plt.subplots(len(panels), 1, figsize=(8.0, 3.0 * len(panels)), squeeze=False)
-    for ax, (name, preset, policy) in zip(axes[:, 0], panels):
-        s = presets[preset]
-        g = paper_group(s, policy)
-        sources = [(f"{s.name}, {s.steps_done:,} steps", an.run_curves(s), g.indices)]
-        if preset in long and policy in long[preset][1]:
-            sources.append(("the full-length runs", long[preset][0], long[preset][1][policy]))
-        an.plot_paper_readings(ax, name, sources)
-        ax.set_title(f"{name}: {'one agent' if s.n_agents == 1 else 'two agents'}, {g.label}", fontsize=9)
-        ax.set_ylabel("curiosity reward")  # stacked panels: the long label would run into the next
-    figure.tight_layout()
-    an.save_figure(figure, out, PAPER_READINGS, dpi=DPI)
+    figure = plt.figure()
+    if an.plot_paper_readings_panels(figure, presets, long):
+        figure.tight_layout()
+        an.save_figure(figure, out, PAPER_READINGS, dpi=DPI)
     plt.close(figure)
 
 

@@ -91,7 +91,8 @@ def test_notebook_runs(tiny_sweeps_dir, tmp_path):
     slugs = {"multi.seeds-0-3": ["eps-eps0.2", "boltzmann-temperature0.5", "boltzmann-temperature1.5", "ucb-ucb_c1"],
              "single": ["eps-eps0.2", "ucb-ucb_c1"]}
     expected = {"fig23-single-vs-multi-curiosity", "fig24-single-vs-multi-vae", "multi.seeds-0-3-fig19-temperatures",
-                "multi.seeds-0-3-observational", "multi.seeds-0-3-temperature-measures", "claim-effects"}
+                "multi.seeds-0-3-observational", "multi.seeds-0-3-temperature-measures", "claim-effects",
+                "paper_readings"}
     # Figures from checkpoints come from each part of the merged sweep, which keeps its own; the
     # part without checkpoints is skipped by name.
     expected |= {"multi-boltzmann-greediness", "multi-fig07-reconstructions-run0", "single-fig07-reconstructions-run0"}

@@ -102,3 +102,26 @@ def test_plot_paper_readings_draws_each_source_and_the_papers_boxes():
     assert len(boxes) == 4 and [(ln.get_xdata()[0], ln.get_ydata()[0]) for ln in outlines] == [
         (b[0], b[2]) for b in boxes]
     plt.close(fig)
+
+
+def test_the_readings_panels_follow_the_loaded_presets_and_draw_the_longer_runs():
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    multi = fake_sweep("multi_agent", 2, POLICIES, 100, seeds=3)
+    multi.metrics["curiosity"][:] = 0.3
+    long = {"multi_agent": (_curves([lambda k: 0.6] * 9), {"eps": [0, 1, 2], "ucb": [6, 7, 8]})}
+    fig = plt.figure()
+    axes = an.plot_paper_readings_panels(fig, {"multi_agent": multi}, long)
+    # figs. 17, 18 and 20 run two agents; fig. 8 (one agent) has no sweep here.
+    assert [ax.get_title().split(":")[0] for ax in axes] == ["fig. 17", "fig. 18", "fig. 20"]
+    means = [[round(float(ln.get_ydata().mean()), 6) for ln in ax.get_lines() if ln.get_label().endswith(" runs)")]
+             for ax in axes]
+    assert means == [[0.3, 0.6], [0.3, 0.6], [0.3]]  # no Boltzmann runs among the longer ones
+    assert fig.get_size_inches()[1] == pytest.approx(9.0)
+    plt.close(fig)
+    empty = plt.figure()
+    assert an.plot_paper_readings_panels(empty, {}) == [] and not empty.axes
+    plt.close(empty)

@@ -28,6 +28,7 @@ Figure) it is given and returning it:
     plot_boltzmann_greediness      how greedy softmax(q / T) is on the runs' states, over T (fig 19's why)
     plot_claim_effects             every test of the claims on one axis: effect / spread, 95% interval
     plot_paper_readings            a curiosity figure's curve beside the numbers the paper reads off it
+    plot_paper_readings_panels     that for figs 8, 17, 18 and 20, a panel each, from the sweeps
     plot_view_fractions            what each agent looks at over time (objects, other agent)
     plot_observational             curiosity in windows where an agent only watches the other act
     plot_losses                    the world model's training losses
@@ -206,6 +207,7 @@ from mjx_curio.analysis.figures import (
     plot_boltzmann_greediness,
     plot_claim_effects,
     plot_paper_readings,
+    plot_paper_readings_panels,
     plot_cumulative_interactions,
     plot_curiosity,
     plot_curiosity_groups,
@@ -288,7 +290,14 @@ from mjx_curio.analysis.power import (
 )
 from mjx_curio.analysis.temperatures import policy_measures_table, temperature_measures, temperature_table
 from mjx_curio.analysis.walls import WALLS_PAIRS, walls_measures, walls_table
-from mjx_curio.analysis.paper_numbers import READINGS, Reading, paper_numbers_table, reading_value, run_curves
+from mjx_curio.analysis.paper_numbers import (
+    READING_PANELS,
+    READINGS,
+    Reading,
+    paper_numbers_table,
+    reading_value,
+    run_curves,
+)
 
 __all__ = [
     # sweeps
@@ -315,7 +324,7 @@ __all__ = [
     # walls
     "WALLS_PAIRS", "walls_measures", "walls_table",
     # paper_numbers
-    "READINGS", "Reading", "paper_numbers_table", "reading_value", "run_curves",
+    "READING_PANELS", "READINGS", "Reading", "paper_numbers_table", "reading_value", "run_curves",
     # power
     "detectable", "largest_allowed", "noncentral_t_sf", "p_value", "power_table", "seeds_needed", "standardised_effect", "t_power",
     # self_model
@@ -339,7 +348,7 @@ __all__ = [
     # figures
     "AGENT_COLORS", "CURIOSITY_LABEL", "EFFECT_COLORS", "FIGURES_DIRNAME", "POLICY_COLORS", "STEPS_LABEL", "TARGET_COLORS",
     "empty_axes", "figures_dir", "plot_action_histogram", "plot_boltzmann_greediness", "plot_claim_effects",
-    "plot_paper_readings",
+    "plot_paper_readings", "plot_paper_readings_panels",
     "plot_cumulative_interactions",
     "plot_curiosity", "plot_curiosity_groups", "plot_curiosity_parts", "plot_error_without_spread",
     "plot_interaction_frequency", "plot_losses", "plot_observational",

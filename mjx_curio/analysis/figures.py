@@ -568,6 +568,35 @@ def plot_paper_readings(ax, figure: str, sources, readings=None):
                    STEPS_LABEL, CURIOSITY_LABEL)
 
 
+def plot_paper_readings_panels(fig, sweeps, long: dict | None = None) -> list:
+    """`plot_paper_readings` for each of the paper's curiosity figures whose preset is among
+    `sweeps` (`paper_numbers.READING_PANELS`: figs. 8, 17, 18 and 20; `sweeps` as
+    `assign_presets` takes them), one panel under the other in `fig`, which is sized to hold them.
+    `long`: {preset: (curves as `run_curves` gives them, {policy: run indices})}, longer runs of a
+    preset drawn beside its sweep (the full-length runs of docs/results/full_length.json). Returns
+    the panels' Axes; none where no preset of a panel is loaded (then `fig` is left empty)."""
+    from mjx_curio.analysis.claims import assign_presets, paper_group
+    from mjx_curio.analysis.paper_numbers import READING_PANELS, run_curves
+
+    presets = assign_presets(sweeps)
+    long = long or {}
+    panels = [(name, preset, policy) for name, preset, policy in READING_PANELS if preset in presets]
+    if not panels:
+        return []
+    fig.set_size_inches(8.0, 3.0 * len(panels))
+    axes = fig.subplots(len(panels), 1, squeeze=False)[:, 0]
+    for ax, (name, preset, policy) in zip(axes, panels):
+        s = presets[preset]
+        g = paper_group(s, policy)
+        sources = [(f"{s.name}, {s.steps_done:,} steps", run_curves(s), g.indices)]
+        if preset in long and policy in long[preset][1]:
+            sources.append(("the full-length runs", long[preset][0], long[preset][1][policy]))
+        plot_paper_readings(ax, name, sources)
+        ax.set_title(f"{name}: {'one agent' if s.n_agents == 1 else 'two agents'}, {g.label}", fontsize=9)
+        ax.set_ylabel("curiosity reward")  # stacked panels: the long label would run into the next
+    return list(axes)
+
+
 def _short_test(label: str) -> str:
     """A test's label without the seed range of a merged sweep's name ('multi_agent.seeds-0-7 ...')."""
     return re.sub(r"\.seeds-\d+-\d+", "", label)

@@ -28,6 +28,10 @@ from mjx_curio.analysis.tables import Table
 
 BIN_STEPS = 1_000  # the paper's smoothing span: 50 points of 20 steps
 PAPER_STEPS = 80_000
+# The paper's curiosity figures with readings to draw (`figures.plot_paper_readings_panels`):
+# (figure, the preset that runs its setting, the policy it plots).
+READING_PANELS = (("fig. 8", "single_agent", "eps"), ("fig. 17", "multi_agent", "eps"),
+                  ("fig. 18", "multi_agent", "ucb"), ("fig. 20", "multi_agent", "boltzmann"))
 END_STEPS = 2_000  # "at the end": the last two bins
 
 
