@@ -92,6 +92,11 @@
 # 45 s a run beside a running sweep; docs/results/history.json, under "The paper's numbers beside
 # ours"):
 #     python experiments/history_evidence.py runs/paper/multi_agent.spread   # and the other three
+# and what the authors' own memory logs there, trained one step from a zero state with their pairing
+# of a two-agent batch and with every view beside its own step (about 1 min a two-agent run and
+# 25 s a one-agent run beside a running sweep; docs/results/authors_memory.json, under the same
+# heading):
+#     python experiments/authors_memory_evidence.py runs/paper/multi_agent.spread   # and the other three
 # The same side experiment with the posterior mean as the latent (z=mean, not the paper's
 # setting: the curiosity is then the world model's error alone), 4 seeds x 40,000 steps (49 min
 # on the Intel Xeon above, 46-59 run-steps/s), not run by this script either:

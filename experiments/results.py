@@ -20,7 +20,8 @@ docs/results.md (between `<!-- generated: NAME -->` and `<!-- end: NAME -->`): t
 sweeps, the figures with their captions, the claims table (`analysis.claims_table`), the
 numbers the paper reads off its figures beside ours (`analysis.paper_numbers_table`, with a
 column for the full-length sweeps) and the curiosity from a zero memory carry (from
-docs/results/history.json, which `history_evidence.py` writes), the seeds each claim's tests need (`analysis.power_table`), claim 1's fall and rise taken apart
+docs/results/history.json, which `history_evidence.py` writes) and from the authors' memory
+(docs/results/authors_memory.json, which `authors_memory_evidence.py` writes), the seeds each claim's tests need (`analysis.power_table`), claim 1's fall and rise taken apart
 into the world model's error and the posterior's spread (`analysis.curiosity_parts_table`), the
 Boltzmann temperatures measure by measure (`analysis.temperature_table`), different walls against identical ones
 (`analysis.walls_table`) and the reconstructions' quality over training (from
@@ -30,7 +31,7 @@ writes, with their figures); the rest
 of the page (what the verdicts mean, why a claim may fail here) is prose and stays as written.
 The claims' numbers also go to docs/results/claims.csv, the walls table's to docs/results/walls.csv.
 
-`check` recomputes the scale, claims, paper's numbers, history, power, curiosity parts, temperatures,
+`check` recomputes the scale, claims, paper's numbers, history, authors' memory, power, curiosity parts, temperatures,
 walls, reconstructions and full-length blocks from the committed results and exits 1 if they differ from the page (the
 test suite does the same).
 """
@@ -57,6 +58,7 @@ RECONSTRUCTIONS = ROOT / "docs" / "results" / "reconstructions.json"  # reconstr
 FULL_LENGTH = ROOT / "docs" / "results" / "full_length.json"  # full_length_evidence.py writes it
 POSTERIOR_DIMS = ROOT / "docs" / "results" / "posterior_dims.json"  # spread_evidence.py writes it
 HISTORY = ROOT / "docs" / "results" / "history.json"  # history_evidence.py writes it
+AUTHORS_MEMORY = ROOT / "docs" / "results" / "authors_memory.json"  # authors_memory_evidence.py writes it
 SNAPSHOT_FILES = ("manifest.json", "progress.json")  # plus metrics/*.npy
 DPI = 80
 
@@ -312,27 +314,70 @@ def history_table(entry: dict) -> str:
     """Markdown of one entry of history.json: per group, means over its runs of the sweep's own
     curiosity over the buffer's steps, the curiosity's expectation on those steps from the live
     carry and from a zero carry, their difference (mean over runs [95 % CI]) and the spread."""
-    from mjx_curio import analysis as an
-
     lines = [f"`{entry['sweep']}`, the networks of step {entry['replay_step']:,} on the replay buffer kept there "
              f"({entry['runs'][0]['steps']:,} steps a run); means over runs:", "",
              "| group | runs | curiosity (the sweep's metrics) | E[curiosity], the live carry | E[curiosity], a zero "
              "carry | zero - live | posterior spread |", "|---|---|---|---|---|---|---|"]
+    for group, n, col in _by_group(entry, ("logged", "live", "zero", "spread")):
+        lines.append(f"| {group} | {n} | {col['logged'].mean():.3f} | {col['live'].mean():.3f} | "
+                     f"{col['zero'].mean():.3f} | {_difference(col['zero'] - col['live'])} | {col['spread'].mean():.3f} |")
+    return "\n".join(lines) + "\n"
+
+
+def _by_group(entry: dict, keys: tuple[str, ...]):
+    """(group, runs, {key: float array over the group's runs}) for each group of an evidence
+    entry's runs, in their order."""
     for group in dict.fromkeys(r["group"] for r in entry["runs"]):
         rs = [r for r in entry["runs"] if r["group"] == group]
-        col = {k: np.array([r[k] for r in rs], float) for k in ("logged", "live", "zero", "spread")}
-        d = an.mean_ci(col["zero"] - col["live"])
-        lines.append(f"| {group} | {len(rs)} | {col['logged'].mean():.3f} | {col['live'].mean():.3f} | "
-                     f"{col['zero'].mean():.3f} | {d[0]:+.3f} [{d[1]:+.3f}, {d[2]:+.3f}] | {col['spread'].mean():.3f} |")
-    return "\n".join(lines) + "\n"
+        yield group, len(rs), {k: np.array([r[k] for r in rs], float) for k in keys}
+
+
+def _difference(d: np.ndarray) -> str:
+    """'+0.094 [+0.064, +0.125]': the mean over runs of a difference with its 95 % CI."""
+    from mjx_curio import analysis as an
+
+    m, lo, hi = an.mean_ci(d)[:3]
+    return f"{m:+.3f} [{lo:+.3f}, {hi:+.3f}]"
+
+
+def _entries_block(path: pathlib.Path, table, missing: str) -> str:
+    """`table(entry)` for every entry of the JSON list at `path`, one a sweep, or `missing`."""
+    entries = json.loads(path.read_text()) if path.exists() else []
+    if not entries:
+        return missing
+    return "\n".join(table(e) for e in sorted(entries, key=lambda e: e["sweep"]))
 
 
 def history_block(path: pathlib.Path = HISTORY) -> str:
     """Every entry of history.json (`history_table`), one table a sweep."""
-    entries = json.loads(path.read_text()) if path.exists() else []
-    if not entries:
-        return "No sweep's replay buffers have been evaluated from a zero carry yet (`experiments/history_evidence.py`).\n"
-    return "\n".join(history_table(e) for e in sorted(entries, key=lambda e: e["sweep"]))
+    return _entries_block(path, history_table, "No sweep's replay buffers have been evaluated from a zero carry "
+                                               "yet (`experiments/history_evidence.py`).\n")
+
+
+def authors_memory_table(entry: dict) -> str:
+    """Markdown of one entry of authors_memory.json: per group, means over its runs of the sweep's
+    own curiosity over the buffer's steps, the number the authors' memory logs late in its training
+    with every view beside its own transition and with the authors' pairing, their difference
+    (mean over runs [95 % CI]) and the posterior's floor."""
+    r0 = entry["runs"][0]
+    two = entry["agents"] > 1
+    lines = [f"`{entry['sweep']}` ({'two agents' if two else 'one agent'}), the VAE of step {entry['replay_step']:,} "
+             f"on the replay buffer kept there ({r0['steps']:,} steps, {r0['updates']:,} updates of a fresh memory "
+             "a run; the logged number's mean over the last quarter of them); means over runs:", "",
+             "| group | runs | curiosity (the sweep's metrics) | logged, each view with its own transition | "
+             "logged, the authors' pairing | authors' - own | posterior floor |", "|---|---|---|---|---|---|---|"]
+    for group, n, col in _by_group(entry, ("logged", "matched", "authors", "floor")):
+        authors, diff = ((f"{col['authors'].mean():.3f}", _difference(col["authors"] - col["matched"])) if two
+                         else ("the same (one agent)", "—"))
+        lines.append(f"| {group} | {n} | {col['logged'].mean():.3f} | {col['matched'].mean():.3f} | {authors} | "
+                     f"{diff} | {col['floor'].mean():.3f} |")
+    return "\n".join(lines) + "\n"
+
+
+def authors_memory_block(path: pathlib.Path = AUTHORS_MEMORY) -> str:
+    """Every entry of authors_memory.json (`authors_memory_table`), one table a sweep."""
+    return _entries_block(path, authors_memory_table, "No sweep's replay buffers have been given to the authors' "
+                                                      "memory yet (`experiments/authors_memory_evidence.py`).\n")
 
 
 def _device(d: dict | list) -> str:
@@ -957,7 +1002,7 @@ def computed_blocks(presets: dict) -> dict[str, str]:
     reconstructions.json for the reconstructions block (what `check` compares)."""
     return {"scale": scale_block(presets), "claims": claims_block(presets), "power": power_block(presets),
             "curiosity_parts": curiosity_parts_block(presets), "paper_numbers": paper_numbers_block(presets),
-            "history": history_block(),
+            "history": history_block(), "authors_memory": authors_memory_block(),
             "temperatures": temperatures_block(presets), "walls": walls_block(presets),
             "reconstructions": reconstructions_block(), "full_length": full_length_block()}
 

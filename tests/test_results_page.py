@@ -40,7 +40,8 @@ def test_the_page_is_what_the_committed_metrics_give(results):
     presets = results.load_presets()
     page = results.PAGE.read_text()
     blocks = results.blocks(page)
-    assert set(blocks) == {"scale", "figures", "claims", "paper_numbers", "history", "power", "curiosity_parts",
+    assert set(blocks) == {"scale", "figures", "claims", "paper_numbers", "history", "authors_memory", "power",
+                           "curiosity_parts",
                            "temperatures", "walls", "reconstructions", "full_length"}
     assert blocks["figures"] == results.figures_block(presets, out=None)
     if presets:  # the CSV's full-precision numbers may differ in the last bit on another CPU's NumPy
@@ -184,11 +185,7 @@ def test_history_evidence_on_the_tiny_sweep(results, tiny_sweep, tmp_path, capsy
     """Every run's curiosity on its replay buffer from the live carry and from a zero carry is
     `curiosity_noise`'s each way, the sweep's own curiosity is taken over the buffer's steps, and
     the page's block shows one row per group. Bad input writes nothing."""
-    module = _experiment("history_evidence")
-    module.OUT = tmp_path / "out" / "history.json"
-    _refuses_bad_sweeps(module, "history_evidence.py", tiny_sweep, tmp_path, capsys)
-    entry = module.evidence(str(tiny_sweep))
-    sweep = an.load(tiny_sweep)
+    module, entry, sweep = _evidence_on_tiny_sweep("history", tiny_sweep, tmp_path, capsys)
     assert [r["run"] for r in entry["runs"]] == [r.name for r in sweep.runs] and entry["replay_step"] == 200
     for i in (0, sweep.n_runs - 1):
         live, zero = an.curiosity_noise(sweep, i), an.curiosity_noise(sweep, i, zero_state=True)
@@ -203,6 +200,32 @@ def test_history_evidence_on_the_tiny_sweep(results, tiny_sweep, tmp_path, capsy
     rows = [r for r in block.splitlines() if r.startswith("| ") and not r.startswith("| group")]
     assert len(rows) == len(sweep.groups())
     assert results.history_block(tmp_path / "none.json").startswith("No sweep's replay buffers")
+
+
+def test_authors_memory_evidence_on_the_tiny_sweeps(results, tiny_sweep, tiny_single_sweep, tmp_path, capsys):
+    """Every run's logged number each way is `logged_curiosity`'s late mean with the run's seed, one
+    agent's two pairings are one, and the page's block shows one row per group. Bad input writes
+    nothing."""
+    from mjx_curio.analysis import authors_memory as am
+
+    module, entry, sweep = _evidence_on_tiny_sweep("authors_memory", tiny_sweep, tmp_path, capsys)
+    assert [r["run"] for r in entry["runs"]] == [r.name for r in sweep.runs] and entry["agents"] == 2
+    got = entry["runs"][0]
+    assert got["steps"] == 200 and got["updates"] == 50  # the buffer holds the run's 200 steps
+    for name in am.PAIRINGS:
+        out = am.logged_curiosity(sweep, 0, pairing_name=name, updates=50, seed=got["seed"])
+        assert got[name] == pytest.approx(out["logged"][-12:].mean(), rel=1e-12)
+        assert got["floor"] == pytest.approx(out["floor"], rel=1e-12)
+    assert got["logged"] == pytest.approx(np.nanmean(sweep.metrics["curiosity"][0]), rel=1e-6)
+    single = module.evidence(str(tiny_single_sweep))
+    assert all(r["authors"] == r["matched"] for r in single["runs"]) and single["agents"] == 1
+    saved = json.loads(module.OUT.read_text())
+    assert [e["sweep"] for e in saved] == sorted([entry["sweep"], single["sweep"]])
+    block = results.authors_memory_block(module.OUT)
+    rows = [r for r in block.splitlines() if r.startswith("| ") and not r.startswith("| group")]
+    assert len(rows) == len(sweep.groups()) + len(an.load(tiny_single_sweep).groups())
+    assert "the same (one agent)" in block
+    assert results.authors_memory_block(tmp_path / "none.json").startswith("No sweep's replay buffers")
 
 
 def test_reconstruction_evidence_policies_and_paired_test_on_planted_numbers(tiny_sweep):
@@ -258,6 +281,15 @@ def _refuses_bad_sweeps(module, script: str, tiny_sweep, tmp_path, capsys) -> No
     assert module.main([str(metrics_only)]) == 2 and f"{script}:" in capsys.readouterr().err
     assert module.main([]) == 2 and f"{script} runs/paper" in capsys.readouterr().err
     assert not (tmp_path / "out").exists()
+
+
+def _evidence_on_tiny_sweep(name: str, tiny_sweep, tmp_path, capsys):
+    """(module, entry, sweep): experiments/<name>_evidence.py, writing docs/results/<name>.json
+    under tmp_path/out instead, checked to refuse bad sweeps, then run on the tiny sweep."""
+    module = _experiment(f"{name}_evidence")
+    module.OUT = tmp_path / "out" / f"{name}.json"
+    _refuses_bad_sweeps(module, f"{name}_evidence.py", tiny_sweep, tmp_path, capsys)
+    return module, module.evidence(str(tiny_sweep)), an.load(tiny_sweep)
 
 
 def test_the_committed_full_length_numbers_are_what_their_runs_give(results):

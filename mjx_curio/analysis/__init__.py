@@ -49,7 +49,7 @@ and the numbers behind them (`moving_average`, `mean_ci`, `cumulative_interactio
 orbax for checkpoints); plotting needs matplotlib.
 
 The package, by job; each module imports only those above it (sweeps none; stats, recon and
-action_values sweeps; curiosity_noise sweeps and action_values; tables sweeps and stats;
+action_values sweeps; curiosity_noise and authors_memory sweeps and action_values; tables sweeps and stats;
 significance none; self_model significance, stats and sweeps; claims self_model, significance,
 sweeps, stats and tables; curiosity_parts claims, significance, stats, sweeps and tables;
 temperatures claims, significance, stats and tables; power claims, significance and tables; walls
@@ -78,6 +78,11 @@ action_values, curiosity_parts, self_model, temperatures and paper_numbers):
               `curiosity_noise` (JAX) and the `CuriosityNoise` it returns; `posterior_spread`,
               the part of the curiosity the noise alone adds, at every kept checkpoint, and
               `posterior_dims`, that variance dimension by dimension
+    authors_memory  the curiosity the authors' code logs, rebuilt on a run's replay buffer: their
+              memory (an LSTM stepped once from a zero state, a linear head per agent) trained
+              with their pairing of a two-agent batch (`authors_pairing`: views beside other
+              transitions' actions) or with every view beside its own (`matched_pairing`):
+              `logged_curiosity` (JAX)
     tables    the headline table: `headline_table` and its `Table` (Markdown, CSV)
     significance  the tests, in NumPy alone: `welch_t`, `one_way_anova`, `block_anova`,
               `equivalence_bound` and `tost_bound` (two one-sided tests), `holm`, `pearson_r`, `fisher_z`,
@@ -118,6 +123,7 @@ from __future__ import annotations
 
 from mjx_curio.analysis.action_values import ActionValues, action_values
 from mjx_curio.analysis.curiosity_noise import CuriosityNoise, curiosity_noise, posterior_dims, posterior_spread
+from mjx_curio.analysis.authors_memory import authors_pairing, logged_curiosity, matched_pairing
 from mjx_curio.analysis.claims import (
     CLAIMS,
     ClaimResult,
@@ -311,8 +317,9 @@ __all__ = [
     # recon, action_values
     "ReconstructionQuality", "Reconstructions", "heldout_slots", "reconstruction_quality", "reconstructions",
     "edge_error", "ActionValues", "action_values",
-    # curiosity_noise
+    # curiosity_noise, authors_memory
     "CuriosityNoise", "curiosity_noise", "posterior_dims", "posterior_spread",
+    "authors_pairing", "logged_curiosity", "matched_pairing",
     # curiosity_parts
     "MEAN_LATENT_PART", "PARTS", "POLICY_PAIRS", "agents_parts_table", "curiosity_parts", "curiosity_parts_table",
     "parts_fall_rise", "policies_parts_table",
