@@ -17,7 +17,8 @@ transitions (`authors_pairing`). With one agent the blocks are the batch itself,
 run's replay buffer, each view encoded by the run's VAE at that checkpoint and drawn from its
 posterior afresh at every update, as theirs does, and returns the logged number of every update
 (before that update, as logged), with the authors' pairing or with every view beside its own
-transition's actions and other view (`pairing="matched"`). The VAE is the run's, held fixed, and
+transition's actions and other view (`pairing_name="matched"`), and the posterior's floor, which
+no memory can go below. The VAE is the run's, held fixed, and
 the memory starts fresh on the buffer's last `capacity` steps: the difference the pairing makes, not
 the authors' curve. Imports `sweeps` and `action_values`; JAX is imported when called.
 """
