@@ -21,11 +21,12 @@
 # (multi_agent) has MULTI_SEEDS (default 8) in all and the one-agent experiment (single_agent)
 # SINGLE_SEEDS (default 8), and one agent with a different texture on every wall
 # (single_agent_walls_different) SINGLE_WALL_SEEDS (default 8), and two agents with a different
-# texture on every wall (multi_agent_walls_different) MULTI_WALL_SEEDS (default 8): the first SEEDS in
+# texture on every wall (multi_agent_walls_different) MULTI_WALL_SEEDS (default 8), and the paper's
+# Boltzmann temperatures (boltzmann_temperatures) TEMPERATURE_SEEDS (default 6): the first SEEDS in
 # runs/paper/<preset> and the rest, as they ran for the page, in sweeps of their own of at most 3
-# seeds each (runs/paper/<preset>.seeds-3-5 and runs/paper/<preset>.seeds-6-7: each fits a 3-hour
-# session on 2 cores), which the page reads with the first as one experiment
-# (analysis.merge_sweeps).
+# seeds each (runs/paper/<preset>.seeds-3-5 and runs/paper/<preset>.seeds-6-7: most fit a 3-hour
+# session on 2 cores; the 15 runs of a temperature part take three), which the page reads with the
+# first as one experiment (analysis.merge_sweeps).
 #
 # Wall time on a 2-core AMD EPYC (lscpu "AMD EPYC", family 25 model 1), CPU only, one sweep at a
 # time, measured from the sweeps' own progress lines (run-steps/s = runs x steps per second):
@@ -37,6 +38,7 @@
 #   single_agent.seeds-3-5  9 runs x 40,000 steps   2 h 7 min (45-47 run-steps/s), on the 2-core Intel Xeon above: not comparable with the AMD rows
 #   single_agent.seeds-6-7  6 runs x 40,000 steps   1 h 6 min (61 run-steps/s; 46 while a test ran beside it), on the same Intel Xeon
 #   boltzmann_temperatures  15 runs x 40,000 steps   9 h 5 min (7,000 steps in 1 h 57 min at 15.3 run-steps/s, 7,000-26,000 in 4 h 22 min at 18.1, 26,000-40,000 in 2 h 47 min at 21.0)
+#   boltzmann_temperatures.seeds-3-5  15 runs x 40,000 steps   8 h 32 min in eight stretches (23-27 run-steps/s alone, 13-28 with tests and analysis beside it), on the Intel Xeon above
 #   boltzmann_low_temperatures  12 runs x 40,000 steps   7 h 37 min (14,000 steps in 2 h 28 min, 14,000-28,000 in 2 h 51 min, 28,000-40,000 in 2 h 18 min at 17.4 run-steps/s; 15-19 throughout)
 #   single_agent_walls_different  3 runs x 15,000 steps   30 min (25.9 run-steps/s)
 #   single_agent_walls_different.seeds-3-5  3 runs x 15,000 steps   14 min (56-59 run-steps/s), on the Intel Xeon above
@@ -121,13 +123,14 @@ MULTI_SEEDS=${MULTI_SEEDS:-8}
 SINGLE_SEEDS=${SINGLE_SEEDS:-8}
 SINGLE_WALL_SEEDS=${SINGLE_WALL_SEEDS:-8}
 MULTI_WALL_SEEDS=${MULTI_WALL_SEEDS:-8}
+TEMPERATURE_SEEDS=${TEMPERATURE_SEEDS:-6}
 STEPS=${STEPS:-}
 MULTI_STEPS=${MULTI_STEPS:-${STEPS:-40000}}
 SINGLE_STEPS=${SINGLE_STEPS:-${STEPS:-40000}}
 TEMPERATURE_STEPS=${TEMPERATURE_STEPS:-${STEPS:-40000}}
 WALL_STEPS=${WALL_STEPS:-${STEPS:-15000}}
 # Bad settings stop here, before any sweep starts (a sweep advances in chunks of 100 steps).
-for knob in SEEDS MULTI_SEEDS SINGLE_SEEDS SINGLE_WALL_SEEDS MULTI_WALL_SEEDS STEPS MULTI_STEPS SINGLE_STEPS TEMPERATURE_STEPS WALL_STEPS; do
+for knob in SEEDS MULTI_SEEDS SINGLE_SEEDS SINGLE_WALL_SEEDS MULTI_WALL_SEEDS TEMPERATURE_SEEDS STEPS MULTI_STEPS SINGLE_STEPS TEMPERATURE_STEPS WALL_STEPS; do
     value=${!knob}
     [[ $knob == STEPS && -z $value ]] && continue  # STEPS unset: each sweep's own default
     if ! [[ $value =~ ^[1-9][0-9]*$ ]] || { [[ $knob != *SEEDS ]] && (( value % 100 )); }; then
@@ -159,13 +162,15 @@ seed_parts() {  # seed_parts PRESET STEPS TOTAL PARTS: SEEDS seeds in runs/paper
 
 seed_parts multi_agent "$MULTI_STEPS" "$MULTI_SEEDS" multi_parts
 seed_parts single_agent "$SINGLE_STEPS" "$SINGLE_SEEDS" single_parts
-sweep boltzmann_temperatures "$TEMPERATURE_STEPS"
+seed_parts boltzmann_temperatures "$TEMPERATURE_STEPS" "$TEMPERATURE_SEEDS" temperature_parts
 sweep boltzmann_low_temperatures "$TEMPERATURE_STEPS"
 seed_parts single_agent_walls_different "$WALL_STEPS" "$SINGLE_WALL_SEEDS" wall_parts
 seed_parts multi_agent_walls_different "$WALL_STEPS" "$MULTI_WALL_SEEDS" multi_wall_parts
 
 # Each needs its sweep's newest checkpoint (the one that keeps the replay buffers).
-"$PY" experiments/temperature_evidence.py runs/paper/boltzmann_temperatures
+for part in "${temperature_parts[@]}"; do
+    "$PY" experiments/temperature_evidence.py "$part"
+done
 "$PY" experiments/temperature_evidence.py runs/paper/boltzmann_low_temperatures
 # Figs. 7 (one agent) and 13 (one agent, every wall different), and the two-agent sweeps' VAEs.
 for part in "${single_parts[@]}" "${wall_parts[@]}" "${multi_parts[@]}" "${multi_wall_parts[@]}"; do

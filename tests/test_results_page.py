@@ -626,6 +626,7 @@ def test_bad_command_lines_are_messages_not_tracebacks(results, tmp_path, capsys
     ("SINGLE_SEEDS=-1", "SINGLE_SEEDS=-1: want a positive whole number"),
     ("SINGLE_WALL_SEEDS=x", "SINGLE_WALL_SEEDS=x: want a positive whole number"),
     ("MULTI_WALL_SEEDS=0", "MULTI_WALL_SEEDS=0: want a positive whole number"),
+    ("TEMPERATURE_SEEDS=3x", "TEMPERATURE_SEEDS=3x: want a positive whole number"),
 ])
 def test_reproduce_refuses_bad_settings_before_any_sweep(setting, message):
     import os
@@ -653,21 +654,23 @@ def test_reproduce_run_lengths_per_sweep_and_steps_for_all(settings, want):
 
     # PYTHON=echo prints each command instead of running it: nothing is swept or written.
     env = {k: v for k, v in os.environ.items()
-           if k not in ("SEEDS", "MULTI_SEEDS", "SINGLE_SEEDS", "SINGLE_WALL_SEEDS", "MULTI_WALL_SEEDS", "STEPS", "MULTI_STEPS",
-                        "SINGLE_STEPS", "TEMPERATURE_STEPS", "WALL_STEPS")}
+           if k not in ("SEEDS", "MULTI_SEEDS", "SINGLE_SEEDS", "SINGLE_WALL_SEEDS", "MULTI_WALL_SEEDS", "TEMPERATURE_SEEDS",
+                        "STEPS", "MULTI_STEPS", "SINGLE_STEPS", "TEMPERATURE_STEPS", "WALL_STEPS")}
     env.update(settings, PYTHON="echo")
     done = subprocess.run(["bash", str(ROOT / "experiments" / "reproduce.sh")], env=env, capture_output=True,
                           text=True, timeout=60)
     assert done.returncode == 0, done.stderr
     got = {m[1]: int(m[2]) for m in re.finditer(r"preset=(\S+) seeds=3 first_seed=0 steps=(\d+)", done.stdout)}
     assert got == want
-    # The one-agent, two-agent and both wall experiments' later seeds as they ran for the page:
+    # The one-agent, two-agent, temperature and both wall experiments' later seeds as they ran for the page:
     # sweeps of their own beside the first.
     parts = re.findall(r"preset=(\w+) seeds=(\d) first_seed=([1-9]) steps=(\d+) .* out=(\S+)", done.stdout)
     assert parts == [("multi_agent", "3", "3", str(want["multi_agent"]), "runs/paper/multi_agent.seeds-3-5"),
                      ("multi_agent", "2", "6", str(want["multi_agent"]), "runs/paper/multi_agent.seeds-6-7"),
                      ("single_agent", "3", "3", str(want["single_agent"]), "runs/paper/single_agent.seeds-3-5"),
                      ("single_agent", "2", "6", str(want["single_agent"]), "runs/paper/single_agent.seeds-6-7"),
+                     ("boltzmann_temperatures", "3", "3", str(want["boltzmann_temperatures"]),
+                      "runs/paper/boltzmann_temperatures.seeds-3-5"),
                      ("single_agent_walls_different", "3", "3", str(want["single_agent_walls_different"]),
                       "runs/paper/single_agent_walls_different.seeds-3-5"),
                      ("single_agent_walls_different", "2", "6", str(want["single_agent_walls_different"]),
@@ -678,7 +681,8 @@ def test_reproduce_run_lengths_per_sweep_and_steps_for_all(settings, want):
                       "runs/paper/multi_agent_walls_different.seeds-6-7")]
     # Then the evidence from their checkpoints (the self-model's from each two-agent part), then the page.
     evidence = re.findall(r"experiments/(\w+)_evidence\.py runs/paper/(\S+)", done.stdout)
-    assert evidence == [("temperature", "boltzmann_temperatures"), ("temperature", "boltzmann_low_temperatures"),
+    assert evidence == [("temperature", "boltzmann_temperatures"), ("temperature", "boltzmann_temperatures.seeds-3-5"),
+                        ("temperature", "boltzmann_low_temperatures"),
                         ("reconstruction", "single_agent"), ("reconstruction", "single_agent.seeds-3-5"),
                         ("reconstruction", "single_agent.seeds-6-7"),
                         ("reconstruction", "single_agent_walls_different"),
@@ -700,11 +704,13 @@ def test_reproduce_at_the_papers_seeds_runs_each_experiment_as_one_sweep():
     import subprocess
 
     env = {k: v for k, v in os.environ.items()
-           if k not in ("MULTI_SEEDS", "SINGLE_SEEDS", "SINGLE_WALL_SEEDS", "MULTI_WALL_SEEDS", "STEPS", "MULTI_STEPS")}
+           if k not in ("MULTI_SEEDS", "SINGLE_SEEDS", "SINGLE_WALL_SEEDS", "MULTI_WALL_SEEDS", "TEMPERATURE_SEEDS", "STEPS",
+                        "MULTI_STEPS")}
     env.update(SEEDS="8", PYTHON="echo")
     done = subprocess.run(["bash", str(ROOT / "experiments" / "reproduce.sh")], env=env, capture_output=True,
                           text=True, timeout=60)
     assert done.returncode == 0, done.stderr
     assert re.findall(r"preset=multi_agent seeds=(\d) first_seed=(\d)", done.stdout) == [("8", "0")]
     assert re.findall(r"preset=single_agent seeds=(\d) first_seed=(\d)", done.stdout) == [("8", "0")]
+    assert re.findall(r"preset=boltzmann_temperatures seeds=(\d) first_seed=(\d)", done.stdout) == [("8", "0")]
     assert ".seeds-" not in done.stdout
