@@ -72,3 +72,5 @@ def test_logged_curiosity_on_the_tiny_sweeps(tiny_sweep, tiny_single_sweep):
     np.testing.assert_array_equal(a, b)
     with pytest.raises(ValueError, match="updates=0"):
         am.logged_curiosity(sweep, 0, updates=0)
+    with pytest.raises(ValueError, match="pairing_name='both': choose one of authors, matched"):
+        am.logged_curiosity(sweep, 0, pairing_name="both")

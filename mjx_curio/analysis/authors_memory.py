@@ -167,7 +167,8 @@ def logged_curiosity(sweep: Sweep, run: int | str = 0, step: int | None = None, 
     import jax
     import jax.numpy as jnp
 
-    pairing(pairing_name, batch, 1)  # ValueError before any work
+    if pairing_name not in PAIRINGS:  # before any work
+        raise ValueError(f"pairing_name={pairing_name!r}: choose one of {', '.join(PAIRINGS)}")
     if not (isinstance(updates, (int, np.integer)) and updates >= 1):
         raise ValueError(f"updates={updates!r}: want a whole number >= 1")
     r = sweep.run(run)
