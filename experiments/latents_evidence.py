@@ -39,15 +39,16 @@ def staleness(path: str) -> dict:
     step = max(sweep.replay_steps())
     replay = sweep.restore_replay(step, keys=("frames", "latents", "size", "index"))
     state = sweep.restore_raw(step)
-    enc = jax.jit(lambda params, frames: wm.encode(cfg, params, frames))
+    enc = jax.jit(lambda params, stats, frames: wm.encode(cfg, params, frames, stats))
     rows = []
     for r in range(sweep.n_runs):
         size, head = int(replay["size"][r]), int(replay["index"][r])
         frames, stored = replay["frames"][r, :size], replay["latents"][r, :size]  # [N, agents, ...]
         vae = jax.tree.map(lambda x: x[r], state["learner"]["vae"])
+        stats = jax.tree.map(lambda x: x[r], state["learner"].get("vae_stats", {}))
         mus, sigmas = [], []
         for lo in range(0, size, 512):
-            mu, logvar = enc(vae, jnp.asarray(frames[lo:lo + 512]))
+            mu, logvar = enc(vae, stats, jnp.asarray(frames[lo:lo + 512]))
             mus.append(np.asarray(mu))
             sigmas.append(np.exp(0.5 * np.asarray(logvar)))
         mu, sigma = np.concatenate(mus), np.concatenate(sigmas)

@@ -296,6 +296,7 @@ POLICY_SETTING = {"eps": "eps", "boltzmann": "temperature", "ucb": "ucb_c"}
 LATENT_MODES = ("stored", "reencode")
 CURIOSITY_SCALES = ("mean", "sum")
 Z_MODES = ("sample", "mean")
+VAE_LAYERS = ("hs", "authors")
 CAMERAS = ("authors", "square")
 FRICTIONS = ("geoms", "unit")
 WALLS = ("same", "different")
@@ -320,7 +321,17 @@ class LearnerConfig:
     # style), computed as a 2x2 conv + depth-to-space (nets.py). Widths are the encoder's
     # reversed and halved: the paper does not give the decoder, and half width keeps a VAE
     # update above 2x PyTorch's speed on the CPU (bench.py).
-    dec_channels: tuple = knob((128, 64, 32, 16), "VAE decoder widths, one per encoder layer", ListOf(Int(1)))
+    dec_channels: tuple = knob((128, 64, 32, 16), "VAE decoder widths, one per encoder layer (vae_layers=hs; "
+                               "authors mirrors vae_channels)", ListOf(Int(1)))
+    # The layers around those convolutions (nets.VAE). "hs": Ha & Schmidhuber's, whose
+    # architecture the paper names: unpadded convolutions and ReLUs. "authors": the authors'
+    # code's: convolutions padded by one pixel, batch normalisation and leaky ReLUs, and their
+    # wider decoder (256-128-64-32-32, then a 3x3 convolution). Batch normalisation makes the
+    # learner keep running averages (LearnerState.vae_stats): the learner's VAE batch and its
+    # re-encoded frames are normalised by their own statistics, the acting frames by the running
+    # averages, as the authors' code does in train and eval mode.
+    vae_layers: str = knob("hs", "VAE layers: hs (Ha & Schmidhuber: ReLU, no padding) or authors (padded, batch "
+                           "normalisation, leaky ReLU, their decoder)", Choice(VAE_LAYERS))
     # Reconstruction = per-image SUM of squared pixel errors (pixels in [0, 1]) plus beta * KL
     # (paper eqs. 1 and 5; the authors' code: `F.mse_loss(..., reduction='sum')` + KL, beta 1).
     # kl_tolerance > 0 adds Ha & Schmidhuber's "free bits", a KL floor of kl_tolerance * latent

@@ -402,7 +402,7 @@ def profile(args: dict, time_fn) -> dict:
     # learner_update's re-encoding: the frames of the sample but the one per sequence and agent
     # whose posterior the VAE update just computed (world_model.reencoded_latents)
     reencode_per_step = 1.0 / ue if lc.latents == "reencode" else 0.0
-    measure("reencode", lambda p, f, t, q, k: wm.reencoded_latents(lc, p, f, t, q, k),
+    measure("reencode", lambda p, f, t, q, k: wm.reencoded_latents(lc, p, f, t, q, k)[0],
             (learner.vae, batch.frames, t_pick, posterior, ks[9]), reencode_per_step)
     layers: dict = {}
     if "reencode_layers" in parts:

@@ -83,7 +83,7 @@ def init_run(cfg: RunConfig, key: jax.Array, policy: policies.PolicyParams) -> R
     env = arena.reset(k_env)
     learner = wm.init_learner(cfg.learner, k_learn)
     frames, _ = arena.render(env)
-    z = wm.latent(cfg.learner, learner.vae, frames, k_z)
+    z = wm.latent(cfg.learner, learner.vae, frames, k_z, learner.vae_stats)
     lc = cfg.learner
     return RunState(
         env=env,
@@ -118,7 +118,7 @@ def act(cfg: RunConfig, s: RunState) -> tuple[RunState, dict]:
     go = ~s.halted & ~diverged
     replay = replay_lib.add(s.replay, replay_lib.Transition(s.frames, s.z, a, s.carry), enabled=go)
     frames, geom_id = arena.render(env)
-    z, spread = wm.latent_and_spread(lc, s.learner.vae, frames, k_z)  # the next step's input and this step's target
+    z, spread = wm.latent_and_spread(lc, s.learner.vae, frames, k_z, s.learner.vae_stats)  # the next step's input and this step's target
     reward = wm.curiosity(lc, z, mix)  # [n]
     metrics = {
         "curiosity": reward,
@@ -170,7 +170,7 @@ def learn(cfg: RunConfig, s: RunState) -> tuple[RunState, dict]:
         learner = jax.tree.map(lambda new, old: jnp.where(finite, new, old), learner, s.learner)
         # The current view's latent in the updated VAE's space, so the next step's replay entry,
         # memory input and curiosity all use one encoder.
-        z = jnp.where(finite, wm.latent(lc, learner.vae, s.frames, k_z), s.z)
+        z = jnp.where(finite, wm.latent(lc, learner.vae, s.frames, k_z, learner.vae_stats), s.z)
         m = {k: jnp.where(finite, v, jnp.nan) for k, v in m.items()}
         m["updated"] = finite.astype(jnp.int32)
         m["non_finite"] = (~finite).astype(jnp.int32)

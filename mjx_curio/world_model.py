@@ -51,6 +51,9 @@ class LearnerState(NamedTuple):
     self_model: Any  # per-agent self-model params, every leaf [n_agents, ...]
     self_opt: Any  # per-agent Adam states, every leaf [n_agents, ...]
     step: jax.Array  # int32, number of updates done
+    # The VAE's batch-normalisation running averages (vae_layers="authors"): {layer: {"mean",
+    # "var"}}. Empty, no leaves, for the default layers, so their checkpoints keep one layout.
+    vae_stats: Any = ()
 
 
 class Batch(NamedTuple):
@@ -65,7 +68,7 @@ class Batch(NamedTuple):
 @functools.lru_cache(maxsize=None)
 def make_nets(cfg: LearnerConfig) -> Nets:
     return Nets(
-        vae=VAE(cfg.image, cfg.latent, cfg.vae_channels, cfg.dec_channels),
+        vae=VAE(cfg.image, cfg.latent, cfg.vae_channels, cfg.dec_channels, cfg.vae_layers),
         rnn=MDNRNN(cfg.n_agents, cfg.latent, cfg.mixtures, cfg.rnn_hidden, cfg.n_actions),
         self_model=SelfModel(cfg.self_hidden, cfg.n_actions),
     )
@@ -137,6 +140,7 @@ def init_learner(cfg: LearnerConfig, key: jax.Array) -> LearnerState:
     )
     opt = optimizer(cfg)
     return LearnerState(
+        vae_stats=initial_vae_stats(cfg),
         vae=vae,
         vae_opt=opt.init(vae),
         rnn=rnn,
@@ -147,23 +151,60 @@ def init_learner(cfg: LearnerConfig, key: jax.Array) -> LearnerState:
     )
 
 
+def initial_vae_stats(cfg: LearnerConfig):
+    """The VAE's batch-normalisation running averages before any training (means 0, variances
+    1, as PyTorch and flax start them), or () for layers without batch normalisation."""
+    if cfg.vae_layers == "hs":
+        return ()
+    frames = jnp.zeros((1, cfg.image, cfg.image, 3), jnp.uint8)
+    shapes = jax.eval_shape(lambda: make_nets(cfg).vae.init(jax.random.PRNGKey(0), frames, jax.random.PRNGKey(0)))
+    return jax.tree_util.tree_map_with_path(
+        lambda path, a: (jnp.ones if path[-1].key == "var" else jnp.zeros)(a.shape, a.dtype), shapes["batch_stats"])
+
+
+def apply_vae(cfg: LearnerConfig, vae_params, stats, *args, method=None, train: bool = False):
+    """The VAE on `args` -> (its output, the running averages after it).
+
+    With batch normalisation (vae_layers="authors") `train=True` normalises by the batch's own
+    statistics and folds them into the running averages, as PyTorch's train mode does; otherwise
+    the running averages normalise and come back unchanged. Layers without it ignore `stats`."""
+    net = make_nets(cfg).vae
+    if cfg.vae_layers == "hs":
+        return net.apply({"params": vae_params}, *args, method=method), stats
+    if not jax.tree.leaves(stats):
+        raise ValueError("vae_layers=authors: the VAE needs its batch-normalisation running averages "
+                         "(LearnerState.vae_stats, or a sweep's params(...)['vae_stats'])")
+    variables = {"params": vae_params, "batch_stats": stats}
+    if not train:
+        return net.apply(variables, *args, method=method, train=False), stats
+    out, updated = net.apply(variables, *args, method=method, train=True, mutable=["batch_stats"])
+    return out, updated["batch_stats"]
+
+
 # ----------------------------------------------------------------------------------------
 # Acting-time pieces
 # ----------------------------------------------------------------------------------------
 
 
-def encode(cfg: LearnerConfig, vae_params, frames):
-    """frames uint8 [..., H, W, 3] -> (mu, logvar), each [..., latent]."""
+def encode(cfg: LearnerConfig, vae_params, frames, stats=()):
+    """frames uint8 [..., H, W, 3] -> (mu, logvar), each [..., latent]. `stats`: the VAE's
+    running averages (LearnerState.vae_stats), which batch normalisation normalises by."""
+    return encode_and_stats(cfg, vae_params, frames, stats)[0]
+
+
+def encode_and_stats(cfg: LearnerConfig, vae_params, frames, stats=(), train: bool = False):
+    """`encode`, and the running averages after it: with `train`, batch normalisation uses the
+    statistics of all these frames together and folds them in (`apply_vae`)."""
     lead = frames.shape[:-3]
     flat = frames.reshape((-1,) + frames.shape[-3:])
-    mu, logvar = make_nets(cfg).vae.apply({"params": vae_params}, flat, method=VAE.encode)
-    return mu.reshape(lead + (cfg.latent,)), logvar.reshape(lead + (cfg.latent,))
+    (mu, logvar), stats = apply_vae(cfg, vae_params, stats, flat, method=VAE.encode, train=train)
+    return (mu.reshape(lead + (cfg.latent,)), logvar.reshape(lead + (cfg.latent,))), stats
 
 
-def decode(cfg: LearnerConfig, vae_params, z):
+def decode(cfg: LearnerConfig, vae_params, z, stats=()):
     """z [..., latent] -> images float32 [..., H, W, 3] in [0, 1]."""
     lead = z.shape[:-1]
-    img = make_nets(cfg).vae.apply({"params": vae_params}, z.reshape(-1, cfg.latent), method=VAE.decode)
+    img, _ = apply_vae(cfg, vae_params, stats, z.reshape(-1, cfg.latent), method=VAE.decode)
     return img.reshape(lead + img.shape[1:])
 
 
@@ -172,15 +213,15 @@ def sample_latent(key, mu, logvar):
     return mu + jnp.exp(0.5 * logvar) * jax.random.normal(key, mu.shape, mu.dtype)
 
 
-def latent(cfg: LearnerConfig, vae_params, frames, key):
+def latent(cfg: LearnerConfig, vae_params, frames, key, stats=()):
     """The latent of frames uint8 [..., H, W, 3] as the acting loop and the memory use it,
     [..., latent]: a reparameterised sample of the posterior q(z|o) = N(mu, sigma^2) drawn
     with `key` (cfg.z == "sample", the paper's z ~ q(z|o) and the authors' code), or its mean
-    mu (cfg.z == "mean"; `key` unused)."""
-    return latent_and_spread(cfg, vae_params, frames, key)[0]
+    mu (cfg.z == "mean"; `key` unused). `stats`: as `encode`'s."""
+    return latent_and_spread(cfg, vae_params, frames, key, stats)[0]
 
 
-def latent_and_spread(cfg: LearnerConfig, vae_params, frames, key):
+def latent_and_spread(cfg: LearnerConfig, vae_params, frames, key, stats=()):
     """`latent`, and the posterior's variance sigma^2 reduced over the latent dimensions as
     `curiosity` reduces them, [...]: 0 under z == "mean".
 
@@ -188,7 +229,7 @@ def latent_and_spread(cfg: LearnerConfig, vae_params, frames, key):
     ||mu - E[z_hat]||^2 + sum(sigma^2) (or both means over the dimensions): the spread is the part
     no prediction can remove, so curiosity minus spread is, in expectation, the MDN-RNN's error
     against the posterior mean."""
-    mu, logvar = encode(cfg, vae_params, frames)
+    mu, logvar = encode(cfg, vae_params, frames, stats)
     if cfg.z != "sample":
         return mu, jnp.zeros(mu.shape[:-1], mu.dtype)
     return sample_latent(key, mu, logvar), _over_latent(cfg, jnp.exp(logvar))
@@ -261,7 +302,7 @@ def _over_latent(cfg: LearnerConfig, x):
     return jnp.mean(x, axis=-1) if cfg.curiosity == "mean" else jnp.sum(x, axis=-1)
 
 
-def vae_loss(cfg: LearnerConfig, vae_params, frames, key):
+def vae_loss(cfg: LearnerConfig, vae_params, frames, key, stats=()):
     """Eq. 1/5 on frames uint8 [B, n_agents, H, W, 3]: summed over agents, mean over B.
 
     Reconstruction is the per-image sum of squared errors and KL is weighted by beta; with
@@ -269,16 +310,17 @@ def vae_loss(cfg: LearnerConfig, vae_params, frames, key):
     kl_tolerance * latent nats per image; the default 0 is the paper's plain KL).
     Returns (loss, (recon, kl)) with recon and kl on the same scale (agents summed).
     """
-    loss, (recon, kl, _) = vae_loss_and_posterior(cfg, vae_params, frames, key)
+    loss, (recon, kl, _, _) = vae_loss_and_posterior(cfg, vae_params, frames, key, stats)
     return loss, (recon, kl)
 
 
-def vae_loss_and_posterior(cfg: LearnerConfig, vae_params, frames, key):
-    """`vae_loss`, with the posterior its encoder computed on the way: (loss, (recon, kl,
-    (mu, logvar))), mu and logvar [B, n_agents, latent]."""
+def vae_loss_and_posterior(cfg: LearnerConfig, vae_params, frames, key, stats=()):
+    """`vae_loss` as the learner trains it (batch normalisation, if any, by this batch's
+    statistics), with the posterior its encoder computed on the way and the running averages
+    after it: (loss, (recon, kl, (mu, logvar), stats)), mu and logvar [B, n_agents, latent]."""
     b, n = frames.shape[:2]
     flat = frames.reshape((b * n,) + frames.shape[2:])
-    recon_img, mu, logvar = make_nets(cfg).vae.apply({"params": vae_params}, flat, key)
+    (recon_img, mu, logvar), stats = apply_vae(cfg, vae_params, stats, flat, key, train=True)
     x = flat.astype(jnp.float32) * (1.0 / 255.0)
     recon = jnp.sum(jnp.square(recon_img - x), axis=(1, 2, 3))  # [B*n]
     kl = -0.5 * jnp.sum(1.0 + logvar - jnp.square(mu) - jnp.exp(logvar), axis=-1)  # [B*n]
@@ -286,31 +328,35 @@ def vae_loss_and_posterior(cfg: LearnerConfig, vae_params, frames, key):
     per_image = recon + cfg.beta * kl_term
     loss = jnp.sum(per_image) / b
     posterior = (mu.reshape(b, n, cfg.latent), logvar.reshape(b, n, cfg.latent))
-    return loss, (jnp.sum(recon) / b, jnp.sum(kl) / b, posterior)
+    return loss, (jnp.sum(recon) / b, jnp.sum(kl) / b, posterior, stats)
 
 
-def reencoded_latents(cfg: LearnerConfig, vae_params, frames, t_pick, posterior_pick, key):
+def reencoded_latents(cfg: LearnerConfig, vae_params, frames, t_pick, posterior_pick, key, stats=()):
     """The current encoder's latents (`latent`) of a replay sample's frames uint8
     [B, T+1, n_agents, H, W, 3] -> [B, T+1, n_agents, latent], drawing the noise as `latent`
     does with `key` (one normal draw of the whole [B, T+1, n_agents, latent]).
 
     The frame at step t_pick[b] of each sequence was just encoded by the VAE's own update with
     the same parameters (`posterior_pick`: (mu, logvar) [B, n_agents, latent]); only the T other
-    frames of each sequence go through the encoder here, one batch of B x T x n_agents images."""
+    frames of each sequence go through the encoder here, one batch of B x T x n_agents images.
+
+    Returns (latents, running averages after): batch normalisation (vae_layers="authors")
+    normalises that batch by its own statistics and folds them into `stats`, as the authors' code
+    encodes its training batch's next frames in train mode."""
     b, tp1 = frames.shape[:2]
     t = jnp.arange(tp1 - 1)[None, :]
     others = t + (t >= t_pick[:, None])  # [B, T]: every step but t_pick, in order
     rows = jnp.arange(b)[:, None]
-    mu_o, logvar_o = encode(cfg, vae_params, frames[rows, others])  # [B, T, n_agents, latent]
+    (mu_o, logvar_o), stats = encode_and_stats(cfg, vae_params, frames[rows, others], stats, train=True)
     # back to time order: step s is t_pick's posterior or `others`' entry s - (s > t_pick)
     s = jnp.arange(tp1)[None, :]
     src = s - (s > t_pick[:, None])
     picked = (s == t_pick[:, None])[..., None, None]
     mu = jnp.where(picked, posterior_pick[0][:, None], mu_o[rows, jnp.minimum(src, tp1 - 2)])
     if cfg.z != "sample":
-        return mu
+        return mu, stats
     logvar = jnp.where(picked, posterior_pick[1][:, None], logvar_o[rows, jnp.minimum(src, tp1 - 2)])
-    return sample_latent(key, mu, logvar)
+    return sample_latent(key, mu, logvar), stats
 
 
 def self_model_loss(cfg: LearnerConfig, self_params, z, h, actions, target):
@@ -366,14 +412,15 @@ def learner_update(cfg: LearnerConfig, state: LearnerState, batch: Batch, key):
     # --- VAE -----------------------------------------------------------------------------
     t_pick = jax.random.randint(k_frame, (b,), 0, tp1)
     frames = batch.frames[jnp.arange(b), t_pick]  # [B, n_agents, H, W, 3]
-    (vae_l, (recon, kl, posterior)), g_vae = jax.value_and_grad(
-        lambda p: vae_loss_and_posterior(cfg, p, frames, k_vae), has_aux=True
+    (vae_l, (recon, kl, posterior, vae_stats)), g_vae = jax.value_and_grad(
+        lambda p: vae_loss_and_posterior(cfg, p, frames, k_vae, state.vae_stats), has_aux=True
     )(state.vae)
 
     # --- MDN-RNN ---------------------------------------------------------------------------
     if cfg.latents == "reencode":
         posterior = jax.lax.stop_gradient(posterior)
-        z = jax.lax.stop_gradient(reencoded_latents(cfg, state.vae, batch.frames, t_pick, posterior, k_z))
+        z, vae_stats = jax.lax.stop_gradient(
+            reencoded_latents(cfg, state.vae, batch.frames, t_pick, posterior, k_z, vae_stats))
     else:
         z = batch.latents
     carry0 = jax.tree.map(lambda x: x[:, 0], batch.carry)
@@ -402,7 +449,7 @@ def learner_update(cfg: LearnerConfig, state: LearnerState, batch: Batch, key):
     rnn, rnn_opt = adam(g_rnn, state.rnn_opt, state.rnn)
     self_model, self_opt = jax.vmap(adam)(g_self, state.self_opt, state.self_model)
 
-    new = LearnerState(vae, vae_opt, rnn, rnn_opt, self_model, self_opt, state.step + 1)
+    new = LearnerState(vae, vae_opt, rnn, rnn_opt, self_model, self_opt, state.step + 1, vae_stats)
     metrics = {
         "vae_loss": vae_l,
         "recon": recon,

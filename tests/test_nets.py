@@ -154,6 +154,80 @@ def test_encoder_depth_follows_image_size():
     assert nets.encoder_sizes(64, 4) == [31, 14, 6, 2]  # the paper's four layers
     assert nets.encoder_sizes(16, 4) == [7, 2]
     assert nets.encoder_sizes(8, 4) == [3]
+    assert nets.encoder_sizes(64, 4, "authors") == [32, 16, 8, 4]  # padded: the authors' 4 x 4 x 256
+    assert nets.encoder_sizes(16, 4, "authors") == [8, 4, 2]
+
+
+def _np_conv4x4_stride2_padded(x, w, b):
+    """PyTorch's Conv2d(kernel 4, stride 2, padding 1) in NumPy, NHWC: x [B,H,W,C], w [4,4,C,O]."""
+    xp = np.pad(x, ((0, 0), (1, 1), (1, 1), (0, 0)))
+    oh, ow = x.shape[1] // 2, x.shape[2] // 2
+    out = np.zeros((x.shape[0], oh, ow, w.shape[-1]))
+    for ky in range(4):
+        for kx in range(4):
+            out += np.einsum("bhwc,co->bhwo", xp[:, ky : ky + 2 * oh : 2, kx : kx + 2 * ow : 2], w[ky, kx])
+    return out + b
+
+
+def _np_authors_encoder(params, stats, frames, train):
+    """The authors' encoder (padded convolutions, batch normalisation, leaky ReLU 0.01, then the
+    mean and log-variance head) in float64 NumPy, as PyTorch's train (`train`) or eval mode
+    computes it: (mu, logvar, the batch moments of each layer [(mean, biased var)])."""
+    x = np.asarray(frames, np.float64) / 255.0
+    moments = []
+    for i in range(len([k for k in params if k.startswith("down_norm_")])):
+        conv, norm = params[f"down_{i}"], params[f"down_norm_{i}"]
+        y = _np_conv4x4_stride2_padded(x, np.asarray(conv["kernel"], np.float64), np.asarray(conv["bias"]))
+        m, v = y.mean(axis=(0, 1, 2)), y.var(axis=(0, 1, 2))
+        moments.append((m, v))
+        if not train:
+            m, v = np.asarray(stats[f"down_norm_{i}"]["mean"]), np.asarray(stats[f"down_norm_{i}"]["var"])
+        y = (y - m) / np.sqrt(v + 1e-5) * np.asarray(norm["scale"]) + np.asarray(norm["bias"])
+        x = np.where(y >= 0, y, 0.01 * y)
+    out = x.reshape(x.shape[0], -1) @ np.asarray(params["heads"]["kernel"], np.float64) + np.asarray(params["heads"]["bias"])
+    half = out.shape[1] // 2
+    return out[:, :half], out[:, half:], moments
+
+
+@pytest.mark.parametrize("train", [False, True])
+def test_authors_encoder_matches_numpy_in_eval_and_train_mode(train):
+    """vae_layers=authors: eval mode normalises by the running averages; train mode by the
+    batch's own moments, and folds them into the running averages with PyTorch's momentum 0.1
+    (the variance unbiased, as PyTorch's)."""
+    cfg = LearnerConfig(image=16, n_agents=1, latent=4, vae_channels=(4, 8, 8), dec_channels=(8, 8, 4),
+                        vae_layers="authors")
+    st = wm.init_learner(cfg, jax.random.PRNGKey(0))
+    rng = np.random.default_rng(3)
+    # gains, shifts and running averages away from their initial 1, 0, 0, 1: each must be used
+    params = jax.tree_util.tree_map_with_path(
+        lambda path, a: a + rng.uniform(0.2, 0.5, a.shape).astype(a.dtype) if "norm" in str(path) else a, st.vae)
+    stats = jax.tree.map(lambda a: a + rng.uniform(0.5, 1.5, a.shape).astype(a.dtype), st.vae_stats)
+    frames = _frames(rng, 6)
+    (mu, logvar), after = jax.jit(lambda p, s, f: wm.encode_and_stats(cfg, p, f, s, train=train))(params, stats, frames)
+    want_mu, want_logvar, moments = _np_authors_encoder(params, stats, frames, train)
+    np.testing.assert_allclose(np.asarray(mu), want_mu, rtol=2e-4, atol=2e-4)
+    np.testing.assert_allclose(np.asarray(logvar), want_logvar, rtol=2e-4, atol=2e-4)
+    for i, (m, v) in enumerate(moments):
+        old, new = stats[f"down_norm_{i}"], after[f"down_norm_{i}"]
+        n = frames.shape[0] * (16 >> (i + 1)) ** 2  # values per channel: PyTorch's unbiased variance
+        want = (0.9 * np.asarray(old["mean"]) + 0.1 * m, 0.9 * np.asarray(old["var"]) + 0.1 * v * n / (n - 1)) \
+            if train else (old["mean"], old["var"])
+        np.testing.assert_allclose(np.asarray(new["mean"]), want[0], rtol=1e-4, atol=1e-5)
+        np.testing.assert_allclose(np.asarray(new["var"]), want[1], rtol=1e-4, atol=1e-5)
+
+
+def test_authors_vae_decodes_to_images_and_needs_its_running_averages():
+    cfg = LearnerConfig(image=16, n_agents=1, vae_layers="authors")
+    st = wm.init_learner(cfg, jax.random.PRNGKey(0))
+    assert sorted(st.vae_stats) == ["down_norm_0", "down_norm_1", "down_norm_2", "up_norm_0", "up_norm_1", "up_norm_2"]
+    z = 10.0 * np.random.default_rng(1).standard_normal((3, cfg.latent), np.float32)
+    img = jax.jit(lambda p, s, z: wm.decode(cfg, p, z, s))(st.vae, st.vae_stats, z)
+    assert img.shape == (3, 16, 16, 3)
+    assert float(img.min()) >= 0.0 and float(img.max()) <= 1.0
+    with pytest.raises(ValueError, match="vae_layers=authors"):
+        wm.encode(cfg, st.vae, _frames(np.random.default_rng(2), 2))
+    # the default layers keep no running averages: their checkpoints' layout is unchanged
+    assert jax.tree.leaves(wm.init_learner(LearnerConfig(image=16, n_agents=1), jax.random.PRNGKey(0)).vae_stats) == []
 
 
 def _frames(rng, n, size=16):
@@ -206,29 +280,31 @@ def _train_vae(cfg, train, held, rng, steps: int = 600):
     opt = wm.optimizer(cfg)
 
     @jax.jit
-    def step(p, s, idx, i):
+    def step(p, s, stats, idx, i):  # stats: batch normalisation's running averages, if any
         key = jax.random.fold_in(jax.random.PRNGKey(2), i)
-        _, g = jax.value_and_grad(lambda p: wm.vae_loss(cfg, p, train[idx], key)[0])(p)
+        (_, aux), g = jax.value_and_grad(lambda p: wm.vae_loss_and_posterior(cfg, p, train[idx], key, stats),
+                                         has_aux=True)(p)
         u, s = opt.update(g, s, p)
-        return optax.apply_updates(p, u), s
+        return optax.apply_updates(p, u), s, aux[-1]
 
     def error(images):  # [M or 1, H, W, 3] in [0, 1] against held
         return float(jnp.mean(jnp.sum((images - held / 255.0) ** 2, axis=(1, 2, 3))))
 
-    recon = jax.jit(lambda p: wm.decode(cfg, p, wm.encode(cfg, p, held)[0]))
-    p, s = st.vae, st.vae_opt
-    before = error(recon(p))
+    recon = jax.jit(lambda p, stats: wm.decode(cfg, p, wm.encode(cfg, p, held, stats)[0], stats))
+    p, s, stats = st.vae, st.vae_opt, st.vae_stats
+    before = error(recon(p, stats))
     for i in range(steps):
-        p, s = step(p, s, rng.integers(0, train.shape[0], 32), i)
-    after = error(recon(p))
+        p, s, stats = step(p, s, stats, rng.integers(0, train.shape[0], 32), i)
+    after = error(recon(p, stats))  # held frames normalised by the running averages, as when acting
     mean_baseline = error(jnp.mean(train[:, 0] / 255.0, axis=0)[None])
     print(f"recon before {before:.2f} after {after:.2f} mean-image baseline {mean_baseline:.2f}")
     return before, after, mean_baseline
 
 
 @pytest.mark.slow
-def test_vae_reconstruction_loss_falls_on_structured_frames():
-    cfg = LearnerConfig(image=16, n_agents=1, kl_tolerance=FREE_BITS)
+@pytest.mark.parametrize("layers", ["hs", "authors"])
+def test_vae_reconstruction_loss_falls_on_structured_frames(layers):
+    cfg = LearnerConfig(image=16, n_agents=1, kl_tolerance=FREE_BITS, vae_layers=layers)
     rng = np.random.default_rng(1)
     train = jnp.asarray(_frames(rng, 512))[:, None]  # [N, 1 agent, H, W, 3]
     held = jnp.asarray(_frames(rng, 64))
@@ -339,3 +415,23 @@ def test_fidelity_knobs_reject_bad_values_naming_the_knob_and_the_choices(kw, al
 
     legacy = {f.name: f.metadata.get("legacy") for f in config.knobs(LearnerConfig)}
     assert (legacy["curiosity"], legacy["z"], legacy["kl_tolerance"]) == ("sum", "mean", 0.5)
+
+
+def test_batch_normalise_gradients_match_autodiff_of_the_plain_formula():
+    """The hand-written backward pass of training-mode batch normalisation (its sums as matmuls)
+    against JAX's autodiff of (x - mean) / sqrt(var + eps) * scale + bias."""
+    rng = np.random.default_rng(4)
+    x = jnp.asarray(rng.normal(1.0, 2.0, (5, 3, 4, 6)), jnp.float32)
+    scale, bias = (jnp.asarray(rng.uniform(0.5, 1.5, 6), jnp.float32) for _ in range(2))
+    weights = jnp.asarray(rng.normal(size=x.shape), jnp.float32)
+
+    def plain(x, scale, bias):
+        m = jnp.mean(x, axis=(0, 1, 2))
+        v = jnp.mean(jnp.square(x - m), axis=(0, 1, 2))
+        return (x - m) / jnp.sqrt(v + 1e-5) * scale + bias
+
+    ours = lambda x, s, b: jnp.sum(weights * nets._batch_normalise(x, s, b)[0])  # noqa: E731
+    ref = lambda x, s, b: jnp.sum(weights * plain(x, s, b))  # noqa: E731
+    np.testing.assert_allclose(float(ours(x, scale, bias)), float(ref(x, scale, bias)), rtol=1e-5)
+    for got, want in zip(jax.grad(ours, argnums=(0, 1, 2))(x, scale, bias), jax.grad(ref, argnums=(0, 1, 2))(x, scale, bias)):
+        np.testing.assert_allclose(np.asarray(got), np.asarray(want), rtol=1e-4, atol=1e-5)

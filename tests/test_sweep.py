@@ -23,7 +23,7 @@ import jax
 import numpy as np
 import pytest
 
-from conftest import ADDED_XLA_FLAGS, CACHE, STOPPED_BY, TINY_SWEEP, sweep_in_process
+from conftest import ADDED_XLA_FLAGS, CACHE, SMALL_LEARNER, STOPPED_BY, TINY_SWEEP, sweep_in_process
 from mjx_curio import analysis as an
 from mjx_curio import checkpoint as ckpt_lib
 from mjx_curio import sweep as sweep_lib
@@ -226,6 +226,25 @@ def test_an_interrupted_sweep_checkpoints_says_how_to_resume_and_resumes_exactly
     sweep_in_process(*[a for a in TINY_SWEEP if a != "steps=200"], "steps=300", f"out={straight}", "resume=true")
     _assert_same_metrics(_metrics(out), _metrics(straight), "interrupted and resumed vs straight, 300 steps")
     _assert_same_tree(_state(out, 300), _state(straight, 300), "final checkpoint")
+
+
+@pytest.mark.slow
+def test_the_authors_vae_layers_checkpoint_their_running_averages_and_resume_exactly(tmp_path):
+    """vae_layers=authors: batch normalisation's running averages are part of each run's state,
+    saved with its checkpoints and restored on resume (what acting normalises by), so a resumed
+    sweep equals the one that never stopped; the analysis reads them beside the weights."""
+    args = ("agents=1", "policies=eps", "seeds=1", "image=16", *SMALL_LEARNER, "vae_layers=authors", "buffer=500",
+            "chunk=100", "checkpoint_every=100", "keep_steps=100", "keep_every=0", "progress=false")
+    straight, stopped = tmp_path / "straight", tmp_path / "stopped"
+    sweep_in_process(*args, "steps=200", f"out={straight}")
+    sweep_in_process(*args, "steps=100", f"out={stopped}")
+    _, stderr = sweep_in_process(*args, "steps=200", f"out={stopped}", "resume=true")
+    assert "restored step 100" in stderr
+    _assert_same_metrics(_metrics(stopped), _metrics(straight), "resumed vs straight")
+    _assert_same_tree(_state(stopped, 200), _state(straight, 200), "final checkpoint, resumed vs straight")
+    stats = an.load(straight).params(200, 0)["vae_stats"]
+    assert {"down_norm_0", "up_norm_0"} <= set(stats)
+    assert not np.allclose(stats["down_norm_0"]["var"], 1.0)  # updated from their initial 0 and 1
 
 
 def test_a_chunk_compiled_ahead_of_time_is_the_jitted_chunk(tiny_sweep, tmp_path):

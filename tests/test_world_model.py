@@ -338,6 +338,30 @@ def test_reencode_mode_trains_the_mdn_on_fresh_encodings(z_mode):
         assert abs(float(m["nll"]) - float(nll_of(st.rnn, mu))) > 1e-3
 
 
+def test_authors_layers_normalise_each_training_batch_by_its_own_statistics():
+    """vae_layers=authors: the update's VAE batch and then its re-encoded frames are each
+    normalised by their own moments, which are folded into the running averages in that order;
+    the MDN-RNN trains on the latents so encoded."""
+    cfg = dataclasses.replace(SMALL, latents="reencode", vae_layers="authors")
+    st = wm.init_learner(cfg, jax.random.PRNGKey(0))
+    b = _batch(cfg, 2)
+    key = jax.random.PRNGKey(1)
+    st2, m = jax.jit(functools.partial(wm.learner_update, cfg))(st, b, key)
+
+    k_frame, k_vae, k_z = jax.random.split(key, 3)
+    t_pick = jax.random.randint(k_frame, (cfg.batch,), 0, cfg.seq_len + 1)
+    picked = b.frames[np.arange(cfg.batch), np.asarray(t_pick)]
+    _, (_, _, posterior, after_vae) = wm.vae_loss_and_posterior(cfg, st.vae, picked, k_vae, st.vae_stats)
+    z, after_reencode = wm.reencoded_latents(cfg, st.vae, b.frames, t_pick, posterior, k_z, after_vae)
+    for got, want in zip(jax.tree.leaves(st2.vae_stats), jax.tree.leaves(after_reencode)):
+        np.testing.assert_allclose(np.asarray(got), np.asarray(want), rtol=1e-5, atol=1e-6)
+    # the decoder runs in the VAE's update only; the encoder's averages moved twice
+    assert not np.allclose(np.asarray(after_vae["down_norm_0"]["mean"]), np.asarray(after_reencode["down_norm_0"]["mean"]))
+    np.testing.assert_array_equal(np.asarray(after_vae["up_norm_0"]["mean"]), np.asarray(after_reencode["up_norm_0"]["mean"]))
+    carry = jax.tree.map(lambda x: x[:, 0], b.carry)
+    np.testing.assert_allclose(m["nll"], wm.mdn_loss(cfg, st.rnn, carry, z, b.actions)[0], rtol=1e-5)
+
+
 @pytest.mark.parametrize("z_mode", ["sample", "mean"])
 def test_reencoding_reuses_the_vae_updates_posterior_of_its_frame(z_mode):
     """`reencoded_latents` encodes only the frames the VAE's update did not (all but t_pick of
@@ -350,7 +374,7 @@ def test_reencoding_reuses_the_vae_updates_posterior_of_its_frame(z_mode):
     t_pick = np.resize([0, cfg.seq_len // 2, cfg.seq_len], cfg.batch)
     posterior = wm.encode(cfg, st.vae, frames[np.arange(cfg.batch), t_pick])
     key = jax.random.PRNGKey(7)
-    reencoded = jax.jit(lambda *a: wm.reencoded_latents(cfg, *a))
+    reencoded = jax.jit(lambda *a: wm.reencoded_latents(cfg, *a)[0])
     got = np.asarray(reencoded(st.vae, frames, t_pick, posterior, key))
     want = wm.latent(cfg, st.vae, frames, key)
     np.testing.assert_allclose(got, np.asarray(want), rtol=1e-5, atol=1e-6)

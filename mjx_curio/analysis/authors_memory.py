@@ -139,18 +139,18 @@ def _encoder(cfg):
 
     from mjx_curio import world_model as wm
 
-    return jax.jit(lambda vae, frames: wm.encode(cfg, vae, frames))
+    return jax.jit(lambda vae, stats, frames: wm.encode(cfg, vae, frames, stats))
 
 
 def _posteriors(sweep: Sweep, run_index: int, step: int, frames: np.ndarray, chunk: int = 500):
     """(mu, sigma), each float32 [steps, agents, Z]: the run's VAE at `step` on `frames`
     [steps, agents, H, W, 3], `chunk` steps at a time (every chunk one shape: one compilation)."""
     f = _encoder(sweep.learner_config())
-    vae = sweep.params(step, run_index)["vae"]
+    params = sweep.params(step, run_index)
     n = frames.shape[0]
     pad = -n % chunk
     padded = np.concatenate([frames, np.repeat(frames[-1:], pad, axis=0)]) if pad else frames
-    parts = [f(vae, padded[k:k + chunk]) for k in range(0, n + pad, chunk)]
+    parts = [f(params["vae"], params["vae_stats"], padded[k:k + chunk]) for k in range(0, n + pad, chunk)]
     mu = np.concatenate([np.asarray(p[0]) for p in parts])[:n]
     logvar = np.concatenate([np.asarray(p[1]) for p in parts])[:n]
     return mu, np.exp(0.5 * logvar)

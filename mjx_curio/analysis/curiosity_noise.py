@@ -111,7 +111,7 @@ def _evaluate(cfg):
 
     def one(params, c, h, z, a, next_frames):  # one step: z [agents, Z], a [agents], frames [agents, H, W, 3]
         _, mix = wm.rnn_step(cfg, params["rnn"], (c, h), z, a)
-        mu, logvar = wm.encode(cfg, params["vae"], next_frames)
+        mu, logvar = wm.encode(cfg, params["vae"], next_frames, params["vae_stats"])
         sq = jnp.square(mu - wm.mixture_mean(mix))
         var = jnp.exp(logvar) if cfg.z == "sample" else jnp.zeros_like(logvar)
         spread, noise = jnp.sum(var, -1), jnp.sum(4 * sq * var + 2 * var**2, -1)
@@ -167,7 +167,7 @@ def _variances(cfg):
 
     from mjx_curio import world_model as wm
 
-    return jax.jit(lambda vae, frames: jnp.exp(wm.encode(cfg, vae, frames)[1]))
+    return jax.jit(lambda vae, stats, frames: jnp.exp(wm.encode(cfg, vae, frames, stats)[1]))
 
 
 def posterior_spread(sweep: Sweep, run: int | str = 0, steps=None, every: int = 10, step: int | None = None) -> dict:
@@ -192,5 +192,6 @@ def posterior_dims(sweep: Sweep, run: int | str = 0, steps=None, every: int = 10
     cfg = sweep.learner_config()
     f = _variances(cfg)
     steps = sweep.checkpoint_steps() if steps is None else [sweep.check_step(s) for s in steps]
-    return {int(s): np.asarray(f(sweep.params(s, r.index)["vae"], frames), np.float64).reshape(-1, cfg.latent).mean(0)
-            for s in steps}
+    params = {int(s): sweep.params(s, r.index) for s in steps}
+    return {s: np.asarray(f(p["vae"], p["vae_stats"], frames), np.float64).reshape(-1, cfg.latent).mean(0)
+            for s, p in params.items()}

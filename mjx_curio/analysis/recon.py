@@ -38,9 +38,9 @@ def _autoencoder(cfg):
 
     from mjx_curio import world_model as wm
 
-    def f(params, frames):
-        mu, _ = wm.encode(cfg, params, frames)
-        return wm.decode(cfg, params, mu)
+    def f(params, stats, frames):  # stats: the VAE's running averages (sweep.params' "vae_stats")
+        mu, _ = wm.encode(cfg, params, frames, stats)
+        return wm.decode(cfg, params, mu, stats)
 
     return jax.jit(f)
 
@@ -73,8 +73,8 @@ def reconstructions(sweep: Sweep, run: int | str = 0, steps: Sequence[int] | Non
     cfg = sweep.learner_config()
     decoded = {}
     for s in steps:
-        vae = sweep.params(s, r.index)["vae"]
-        decoded[s] = np.clip(np.asarray(_autoencoder(cfg)(vae, frames)), 0.0, 1.0)
+        p = sweep.params(s, r.index)
+        decoded[s] = np.clip(np.asarray(_autoencoder(cfg)(p["vae"], p["vae_stats"], frames)), 0.0, 1.0)
     return Reconstructions(r, steps, frames, sources, decoded)
 
 
@@ -149,7 +149,8 @@ def reconstruction_quality(sweep: Sweep, steps: Sequence[int] | None = None, fra
             if not len(frames):
                 continue
             real = frames.astype(np.float64) / 255.0
-            decoded = np.asarray(_autoencoder(cfg)(sweep.params(s, i)["vae"], frames), np.float64)
+            p = sweep.params(s, i)
+            decoded = np.asarray(_autoencoder(cfg)(p["vae"], p["vae_stats"], frames), np.float64)
             per_frame = np.square(decoded - real).sum(axis=(1, 2, 3))
             error[i, k] = per_frame.mean()
             edges[i, k] = edge_error(decoded, real)

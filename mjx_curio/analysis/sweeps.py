@@ -348,10 +348,12 @@ class Sweep:
 
     def params(self, step: int, run: int | str) -> dict:
         """Run `run`'s network parameters at checkpoint `step`: {"vae", "rnn", "self_model"}, each
-        a flax parameter tree of NumPy arrays (self_model leaves have a leading agents axis)."""
+        a flax parameter tree of NumPy arrays (self_model leaves have a leading agents axis), and
+        "vae_stats", the VAE's batch-normalisation running averages (world_model.encode's
+        `stats`; {} for layers without batch normalisation)."""
         r = self.run(run).index
         learner = self.restore_raw(step)["learner"]
-        return {k: _index_tree(learner[k], r) for k in ("vae", "rnn", "self_model")}
+        return {k: _index_tree(learner.get(k, {}), r) for k in ("vae", "rnn", "self_model", "vae_stats")}
 
 
 def load(path: str | pathlib.Path) -> Sweep:
