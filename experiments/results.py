@@ -21,7 +21,8 @@ sweeps, the figures with their captions, the claims table (`analysis.claims_tabl
 numbers the paper reads off its figures beside ours (`analysis.paper_numbers_table`, with a
 column for the full-length sweeps) and the curiosity from a zero memory carry (from
 docs/results/history.json, which `history_evidence.py` writes) and from the authors' memory
-(docs/results/authors_memory.json, which `authors_memory_evidence.py` writes), the seeds each claim's tests need (`analysis.power_table`), claim 1's fall and rise taken apart
+(docs/results/authors_memory.json, which `authors_memory_evidence.py` writes), fig. 8's setting
+with the authors' VAE layers beside Ha and Schmidhuber's (`analysis.readings_side_by_side`), the seeds each claim's tests need (`analysis.power_table`), claim 1's fall and rise taken apart
 into the world model's error and the posterior's spread (`analysis.curiosity_parts_table`), the
 Boltzmann temperatures measure by measure (`analysis.temperature_table`), different walls against identical ones
 (`analysis.walls_table`) and the reconstructions' quality over training (from
@@ -31,7 +32,7 @@ writes, with their figures); the rest
 of the page (what the verdicts mean, why a claim may fail here) is prose and stays as written.
 The claims' numbers also go to docs/results/claims.csv, the walls table's to docs/results/walls.csv.
 
-`check` recomputes the scale, claims, paper's numbers, history, authors' memory, power, curiosity parts, temperatures,
+`check` recomputes the scale, claims, paper's numbers, history, authors' memory, VAE layers, power, curiosity parts, temperatures,
 walls, reconstructions and full-length blocks from the committed results and exits 1 if they differ from the page (the
 test suite does the same).
 """
@@ -378,6 +379,22 @@ def authors_memory_block(path: pathlib.Path = AUTHORS_MEMORY) -> str:
     """Every entry of authors_memory.json (`authors_memory_table`), one table a sweep."""
     return _entries_block(path, authors_memory_table, "No sweep's replay buffers have been given to the authors' "
                                                       "memory yet (`experiments/authors_memory_evidence.py`).\n")
+
+
+# Fig. 8's setting twice, the same seeds: Ha & Schmidhuber's VAE layers (the default) and the authors'.
+VAE_LAYERS_SWEEPS = ("single_agent.spread", "single_agent.authors_vae")
+
+
+def vae_layers_block(presets: dict) -> str:
+    """The side experiment with the authors' VAE layers beside the same seeds with Ha and
+    Schmidhuber's, in fig. 8's windows (`analysis.readings_side_by_side`)."""
+    from mjx_curio import analysis as an
+
+    a, b = (presets.get(name) for name in VAE_LAYERS_SWEEPS)
+    if a is None or b is None:
+        return (f"The side experiment with the authors' VAE layers ({VAE_LAYERS_SWEEPS[1]}, beside "
+                f"{VAE_LAYERS_SWEEPS[0]}) has not been snapshotted yet.\n")
+    return an.readings_side_by_side(a, b, ("Ha & Schmidhuber's layers", "the authors' layers")).to_markdown()
 
 
 def _device(d: dict | list) -> str:
@@ -1003,6 +1020,7 @@ def computed_blocks(presets: dict) -> dict[str, str]:
     return {"scale": scale_block(presets), "claims": claims_block(presets), "power": power_block(presets),
             "curiosity_parts": curiosity_parts_block(presets), "paper_numbers": paper_numbers_block(presets),
             "history": history_block(), "authors_memory": authors_memory_block(),
+            "vae_layers": vae_layers_block(presets),
             "temperatures": temperatures_block(presets), "walls": walls_block(presets),
             "reconstructions": reconstructions_block(), "full_length": full_length_block()}
 

@@ -6,6 +6,7 @@ import pytest
 
 from mjx_curio import analysis as an
 from mjx_curio.analysis import paper_numbers as pn
+from mjx_curio.analysis.significance import welch_t
 
 from test_claims import POLICIES, fake_sweep
 
@@ -125,3 +126,28 @@ def test_the_readings_panels_follow_the_loaded_presets_and_draw_the_longer_runs(
     empty = plt.figure()
     assert an.plot_paper_readings_panels(empty, {}) == [] and not empty.axes
     plt.close(empty)
+
+
+def test_readings_side_by_side_compares_two_sweeps_in_the_figures_windows():
+    """Two one-agent ε-greedy sweeps with planted levels: each level window of fig. 8 the shorter
+    reaches, and the last 2,000 steps both ran, with b - a and Welch's test against NumPy."""
+    a = fake_sweep("a", 1, [("eps", 0.2)], 600, seeds=4)  # 12,000 steps
+    b = fake_sweep("b", 1, [("eps", 0.2)], 800, seeds=4)  # 16,000 steps: only a's are read
+    rng = np.random.default_rng(1)
+    for s, level in ((a, 0.5), (b, 0.8)):
+        per_run = level + 0.05 * rng.standard_normal(4)
+        s.metrics["curiosity"][:] = per_run[:, None, None]
+        s.metrics["curiosity_spread"][:] = 0.4
+    t = pn.readings_side_by_side(a, b, ("A", "B"))
+    windows = [r[0] for r in t.rows[::2]]
+    assert windows == ["steps 0-1,000", "steps 4,000-6,000", "steps 10,000-12,000 (the last both ran)"]
+    xa = a.metrics["curiosity"][:, 0, 0].astype(float)
+    xb = b.metrics["curiosity"][:, 0, 0].astype(float)
+    want = welch_t(xb, xa)
+    got = t.values[0]
+    assert got["metric"] == "curiosity" and got["A"] == pytest.approx(xa.mean()) and got["B"] == pytest.approx(xb.mean())
+    assert got["diff"] == pytest.approx(xb.mean() - xa.mean()) and got["p"] == pytest.approx(want["p"])
+    assert t.values[1]["metric"] == "curiosity_spread" and t.values[1]["diff"] == pytest.approx(0.0, abs=1e-6)
+    assert t.rows[0][2] == "close to 1" and t.rows[1][2] == "—"
+    with pytest.raises(ValueError, match="no curiosity levels"):
+        pn.readings_side_by_side(a, b, ("A", "B"), figure="fig. 21")

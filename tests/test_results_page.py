@@ -40,9 +40,8 @@ def test_the_page_is_what_the_committed_metrics_give(results):
     presets = results.load_presets()
     page = results.PAGE.read_text()
     blocks = results.blocks(page)
-    assert set(blocks) == {"scale", "figures", "claims", "paper_numbers", "history", "authors_memory", "power",
-                           "curiosity_parts",
-                           "temperatures", "walls", "reconstructions", "full_length"}
+    assert set(blocks) == {"scale", "figures", "claims", "paper_numbers", "history", "authors_memory", "vae_layers",
+                           "power", "curiosity_parts", "temperatures", "walls", "reconstructions", "full_length"}
     assert blocks["figures"] == results.figures_block(presets, out=None)
     if presets:  # the CSV's full-precision numbers may differ in the last bit on another CPU's NumPy
         _assert_same_csv(results.CLAIMS_CSV.read_text(), an.claims_table(presets).to_csv())
@@ -714,3 +713,13 @@ def test_reproduce_at_the_papers_seeds_runs_each_experiment_as_one_sweep():
     assert re.findall(r"preset=single_agent seeds=(\d) first_seed=(\d)", done.stdout) == [("8", "0")]
     assert re.findall(r"preset=boltzmann_temperatures seeds=(\d) first_seed=(\d)", done.stdout) == [("8", "0")]
     assert ".seeds-" not in done.stdout
+
+
+def test_the_vae_layers_block_sets_the_two_sweeps_side_by_side_or_says_what_is_missing(results):
+    from test_claims import fake_sweep
+
+    a, b = (fake_sweep(name, 1, [("eps", 0.2)], 300, seeds=2) for name in results.VAE_LAYERS_SWEEPS)
+    assert "has not been snapshotted yet" in results.vae_layers_block({results.VAE_LAYERS_SWEEPS[0]: a})
+    block = results.vae_layers_block(dict(zip(results.VAE_LAYERS_SWEEPS, (a, b))))
+    assert block.startswith("| window | what | the paper (one run) | Ha & Schmidhuber's layers | the authors' layers |")
+    assert "steps 0-1,000" in block and "steps 4,000-6,000 (the last both ran)" in block

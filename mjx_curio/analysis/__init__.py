@@ -301,6 +301,7 @@ from mjx_curio.analysis.paper_numbers import (
     READINGS,
     Reading,
     paper_numbers_table,
+    readings_side_by_side,
     reading_value,
     run_curves,
 )
@@ -331,7 +332,7 @@ __all__ = [
     # walls
     "WALLS_PAIRS", "walls_measures", "walls_table",
     # paper_numbers
-    "READING_PANELS", "READINGS", "Reading", "paper_numbers_table", "reading_value", "run_curves",
+    "READING_PANELS", "READINGS", "Reading", "paper_numbers_table", "reading_value", "readings_side_by_side", "run_curves",
     # power
     "detectable", "largest_allowed", "noncentral_t_sf", "p_value", "power_table", "seeds_needed", "standardised_effect", "t_power",
     # self_model
