@@ -69,7 +69,7 @@ from mjx_curio import host_devices
 from mjx_curio import profile as profile_lib
 from mjx_curio import world_model as wm
 from mjx_curio.cli import Key, as_choice, as_int, as_str, main_guard
-from mjx_curio.config import LATENT_MODES, AutoOr, ConfigError, Int, LearnerConfig
+from mjx_curio.config import LATENT_MODES, VAE_LAYERS, AutoOr, ConfigError, Int, LearnerConfig
 
 PROG = "mjx_curio.bench"
 SUMMARY = ("Throughput figures: what=env (physics + rendering), learner (VAE / learner updates), sweep (whole runs), "
@@ -196,9 +196,10 @@ def bench_env(args: dict) -> dict:
 # ------------------------------------------------------------------------------- learner
 
 
-def bench_vae(image: int = 64, batch: int = 32, iters: int = 10, repeats: int = 3, seed: int = 0) -> dict:
+def bench_vae(image: int = 64, batch: int = 32, iters: int = 10, repeats: int = 3, seed: int = 0,
+              vae_layers: str = "hs") -> dict:
     """VAE update throughput: forward + backward + Adam on `batch` frames of image x image."""
-    cfg = LearnerConfig(image=image, n_agents=1)
+    cfg = LearnerConfig(image=image, n_agents=1, vae_layers=vae_layers)
     key = jax.random.PRNGKey(seed)
     state = wm.init_learner(cfg, key)
     opt = wm.optimizer(cfg)
@@ -206,7 +207,7 @@ def bench_vae(image: int = 64, batch: int = 32, iters: int = 10, repeats: int = 
 
     @jax.jit
     def step(params, opt_state, k):
-        (loss, _), g = jax.value_and_grad(lambda p: wm.vae_loss(cfg, p, frames, k), has_aux=True)(params)
+        (loss, _), g = jax.value_and_grad(lambda p: wm.vae_loss(cfg, p, frames, k, state.vae_stats), has_aux=True)(params)
         u, opt_state = opt.update(g, opt_state, params)
         return optax.apply_updates(params, u), opt_state, loss
 
@@ -216,6 +217,7 @@ def bench_vae(image: int = 64, batch: int = 32, iters: int = 10, repeats: int = 
     return {
         "image": image,
         "batch": batch,
+        "vae_layers": vae_layers,
         "compile_s": round(first, 3),
         "step_ms": round(best * 1e3, 2),
         "images_per_s": round(batch / best, 1),
@@ -231,9 +233,11 @@ def bench_learner_update(
     iters: int = 5,
     repeats: int = 3,
     seed: int = 0,
+    vae_layers: str = "hs",
 ) -> dict:
     """Time of one full `learner_update` (VAE + MDN-RNN + self-models) for one run."""
-    cfg = LearnerConfig(image=image, n_agents=n_agents, batch=batch, seq_len=seq_len, latents=latents)
+    cfg = LearnerConfig(image=image, n_agents=n_agents, batch=batch, seq_len=seq_len, latents=latents,
+                        vae_layers=vae_layers)
     key = jax.random.PRNGKey(seed)
     state = wm.init_learner(cfg, key)
     ks = jax.random.split(key, 4)
@@ -261,10 +265,10 @@ def bench_learner_update(
 
 def bench_learner(args: dict) -> dict:
     """The VAE update alone and one full learner update."""
-    vae = bench_vae(args["image"], args["vae_batch"], args["iters"], args["repeats"], args["seed"])
+    vae = bench_vae(args["image"], args["vae_batch"], args["iters"], args["repeats"], args["seed"], args["vae_layers"])
     update = bench_learner_update(
         args["image"], args["agents"], args["batch"], args["seq_len"], args["latents"],
-        args["iters"], args["repeats"], args["seed"],
+        args["iters"], args["repeats"], args["seed"], args["vae_layers"],
     )
     return {"what": "learner", "vae_update": vae, "learner_update": update, "peak_rss_mib": _peak_rss_mib(), **_platform()}
 
@@ -288,7 +292,8 @@ def bench_sweep(args: dict) -> dict:
     devices = jax.devices()
     loop = profile_lib.runs_loop(args)
     old = args["fidelity"] == "legacy"
-    settings = {"latents": args["latents"], **(config_lib.legacy_settings(LearnerConfig) if old else {})}
+    settings = {"latents": args["latents"], "vae_layers": args["vae_layers"],
+                **(config_lib.legacy_settings(LearnerConfig) if old else {})}
     learner = LearnerConfig(image=args["image"], n_agents=args["agents"], batch=args["batch"], seq_len=args["seq_len"],
                             **settings)
     cfg = run_lib.RunConfig(n_agents=args["agents"], image=args["image"], buffer=args["buffer"],
@@ -432,6 +437,8 @@ KEYS = [
     Key("seq_len", 16, "learner, sweep, profile, convs: transitions per sequence", as_int(2)),
     Key("latents", LearnerConfig().latents, "learner, sweep, profile: " + " | ".join(LATENT_MODES)
         + " (sweep with fidelity=legacy: stored, as before the paper-faithful defaults)", as_choice(LATENT_MODES)),
+    Key("vae_layers", LearnerConfig().vae_layers, "learner, sweep, profile: the VAE's layers, " + " | ".join(VAE_LAYERS),
+        as_choice(VAE_LAYERS)),
     Key("update_every", 4, "sweep, profile: agent steps between learner updates", as_int(1)),
     Key("buffer", 10_000, "sweep, profile: replay capacity per run", as_int(3)),
     Key("parts", tuple(name for name, _ in profile_lib.COMPONENTS), "profile: components to profile",

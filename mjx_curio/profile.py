@@ -284,7 +284,7 @@ def _configs(args: dict, loop: str = "map"):
     from mjx_curio.config import LearnerConfig
 
     lc = LearnerConfig(image=args["image"], n_agents=args["agents"], batch=args["batch"], seq_len=args["seq_len"],
-                       latents=args["latents"])
+                       latents=args["latents"], vae_layers=args["vae_layers"])
     rc = run_lib.RunConfig(n_agents=args["agents"], image=args["image"], buffer=args["buffer"],
                            update_every=args["update_every"], metrics_every=args["update_every"], runs_loop=loop,
                            learner=lc)
@@ -380,7 +380,8 @@ def profile(args: dict, time_fn) -> dict:
     # --- acting, every step
     measure("physics", arena.step, (env, actions), 1.0)
     measure("rendering", arena.render, (env,), 1.0)
-    measure("encoding", lambda p, f, k: wm.latent(lc, p, f, k), (learner.vae, frames, ks[3]), 1.0 + 1.0 / ue)
+    stats = learner.vae_stats  # batch normalisation's running averages (vae_layers=authors), else ()
+    measure("encoding", lambda p, f, k: wm.latent(lc, p, f, k, stats), (learner.vae, frames, ks[3]), 1.0 + 1.0 / ue)
     measure("memory", lambda p, c, z, a: wm.rnn_step(lc, p, c, z, a), (learner.rnn, carry, z, actions), 1.0)
     measure("self_models", lambda p, z, h: wm.predict_curiosity(lc, p, z, h), (learner.self_model, z, carry[1]), 1.0)
 
@@ -395,20 +396,20 @@ def profile(args: dict, time_fn) -> dict:
     def vae_update(p, st, frames, k):  # learner_update's VAE part: one frame per sequence and agent
         k_frame, k_vae = jax.random.split(k)
         f = frames[jnp.arange(b), jax.random.randint(k_frame, (b,), 0, t1)]
-        (loss, _), g = jax.value_and_grad(lambda p: wm.vae_loss(lc, p, f, k_vae), has_aux=True)(p)
+        (loss, _), g = jax.value_and_grad(lambda p: wm.vae_loss(lc, p, f, k_vae, stats), has_aux=True)(p)
         return adam(g, st, p), loss
 
     measure("vae_update", vae_update, (learner.vae, learner.vae_opt, batch.frames, ks[8]), 1.0 / ue)
     # learner_update's re-encoding: the frames of the sample but the one per sequence and agent
     # whose posterior the VAE update just computed (world_model.reencoded_latents)
     reencode_per_step = 1.0 / ue if lc.latents == "reencode" else 0.0
-    measure("reencode", lambda p, f, t, q, k: wm.reencoded_latents(lc, p, f, t, q, k)[0],
+    measure("reencode", lambda p, f, t, q, k: wm.reencoded_latents(lc, p, f, t, q, k, stats)[0],
             (learner.vae, batch.frames, t_pick, posterior, ks[9]), reencode_per_step)
     layers: dict = {}
     if "reencode_layers" in parts:
         # the re-encoding's encoder pass stage by stage, each on the previous stage's output
         x = batch.frames[:, 1:].reshape((-1,) + batch.frames.shape[3:])  # B x T x n_agents frames
-        vae, x = copies(n_runs, learner.vae, x)
+        vae, x = copies(n_runs, (learner.vae, stats), x)
         for stage, name in enumerate(encoder_stage_names(lc)):
             layers[name], stage_fn = timed(partial(encoder_stage, lc, stage), (vae, x), reencode_per_step)
             x = stage_fn(vae, x)  # the next stage's input, by the program just timed
@@ -495,14 +496,15 @@ def _rounded(row: dict) -> dict:
 def encoder_stage_names(lc) -> list[str]:
     """The encoder's stages (nets.VAE.encode_stage) as the profile names them, with each output's
     shape: conv1_31x31x32 ... at 64 x 64, then the mean and log-variance head."""
-    sizes = nets.encoder_sizes(lc.image, len(lc.vae_channels))
+    sizes = nets.encoder_sizes(lc.image, len(lc.vae_channels), lc.vae_layers)
     return [f"conv{i + 1}_{s}x{s}x{c}" for i, (s, c) in enumerate(zip(sizes, lc.vae_channels))] + ["head"]
 
 
-def encoder_stage(lc, stage: int, vae_params, x):
+def encoder_stage(lc, stage: int, vae, x):
     """Stage `stage` of the encoder on a batch x (uint8 frames for stage 0, else the stage before's
-    output)."""
-    return wm.make_nets(lc).vae.apply({"params": vae_params}, stage, x, method=nets.VAE.encode_stage)
+    output), as the re-encoding runs it (batch normalisation, if any, by the batch's statistics);
+    `vae`: (params, running averages)."""
+    return wm.apply_vae(lc, *vae, stage, x, method=nets.VAE.encode_stage, train=True)[0]
 
 
 def peak_note(result: dict) -> str:

@@ -18,7 +18,7 @@ def _encoder_flops(lc: LearnerConfig) -> float:
     """FLOPs of encoding one frame, by hand: 2 x H_out x W_out x k x k x C_in x C_out per 4x4
     stride-2 convolution (nets.encoder_sizes gives H_out) and 2 x in x out for the mean and
     log-variance head."""
-    sizes = nets.encoder_sizes(lc.image, len(lc.vae_channels))
+    sizes = nets.encoder_sizes(lc.image, len(lc.vae_channels), lc.vae_layers)
     chans = (3,) + tuple(lc.vae_channels[: len(sizes)])
     convs = sum(2 * s * s * 4 * 4 * chans[i] * chans[i + 1] for i, s in enumerate(sizes))
     return convs + 2 * sizes[-1] ** 2 * chans[len(sizes)] * 2 * lc.latent
@@ -48,6 +48,22 @@ def test_encoder_flops_match_a_hand_count(capsys):
     h, zin = lc.rnn_hidden, lc.n_agents * (lc.latent + lc.n_actions)
     mm = 2 * (zin * 4 * h + h * 4 * h + h * lc.n_agents * lc.latent * lc.mixtures * 3)
     assert mm <= comps["memory"]["xla_flops"] <= 1.1 * mm
+
+
+def test_the_authors_layers_encoder_flops_match_a_hand_count():
+    """vae_layers=authors: padded convolutions (16 -> 8, 4, 2 here), whose batch normalisation
+    (by the running averages when acting) and leaky ReLUs add elementwise work only. XLA's own
+    count leaves out the taps that fall on the padding, the jaxpr count does not."""
+    result = bench.main(["what=profile", "parts=encoding", "vae_layers=authors", *TINY])
+    lc = LearnerConfig(image=16, n_agents=2, vae_layers="authors")
+    hand = lc.n_agents * _encoder_flops(lc)
+    assert _encoder_flops(lc) > _encoder_flops(LearnerConfig(image=16, n_agents=2))  # three layers, not two
+    assert 0.5 * hand <= result["components"]["encoding"]["xla_flops"] <= 1.1 * hand
+    st = wm.init_learner(lc, jax.random.key(0))
+    f = lambda p, s, x, k: wm.latent(lc, p, x, k, s)  # noqa: E731
+    args = (st.vae, st.vae_stats, jnp.zeros((2, 16, 16, 3), jnp.uint8), jax.random.key(1))
+    counted, unknown = profile.jaxpr_flops(jax.make_jaxpr(f)(*args).jaxpr)
+    assert counted == hand and not unknown
 
 
 def test_loop_bodies_are_counted_per_iteration():
