@@ -45,6 +45,13 @@ SCHEMA: dict[str, Metric] = {
                         "curiosity reward r (eq. 3): squared error between z_{t+1} and E[z_hat_{t+1}], averaged "
                         "(curiosity=mean) or summed (curiosity=sum) over the latent dimensions; mean over the "
                         "window's steps, per agent"),
+    # What the authors' code logs as curiosity: a statistic of each training batch (eq. 3 on the
+    # latents the memory trains on), not the reward the agent gets along its own trajectory.
+    "batch_curiosity": Metric("float32", A, "squared latent distance",
+                              "curiosity of the learner update's training batch: eq. 3 on the latents the MDN-RNN "
+                              "trains on (re-encoded by the current VAE, batch normalisation by the batch's own "
+                              "statistics), the self-models' targets, mean over its transitions; mean over the "
+                              "window's updates, per agent"),
     "curiosity_sample": Metric("float32", A, "squared latent distance",
                                "curiosity reward at the window's last step (the paper's raw sample every 20 steps), per agent"),
     # Curiosity's expectation over the latent's sampling noise is the MDN-RNN's error against the

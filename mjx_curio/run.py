@@ -194,6 +194,7 @@ def _no_update(cfg: RunConfig) -> dict:
     nan = jnp.full((), jnp.nan, jnp.float32)
     m = {k: nan for k in ("vae_loss", "recon", "kl", "nll", "self_loss", "curiosity")}
     m["self_loss_agents"] = jnp.full((cfg.n_agents,), jnp.nan, jnp.float32)
+    m["curiosity_agents"] = jnp.full((cfg.n_agents,), jnp.nan, jnp.float32)
     m["updated"] = jnp.zeros((), jnp.int32)
     m["non_finite"] = jnp.zeros((), jnp.int32)
     return m
@@ -287,8 +288,9 @@ def reduce_windows(cfg: RunConfig, step_m: dict, learn_m: dict) -> dict:
     upd = learn_m["updated"]
     u = win(upd, per)  # [W, per]
     n_upd = jnp.sum(u, axis=1)
-    for name in ("vae_loss", "recon", "kl", "nll", "self_loss", "self_loss_agents"):
-        x = win(learn_m[name], per)
+    learned = {name: name for name in ("vae_loss", "recon", "kl", "nll", "self_loss", "self_loss_agents")}
+    for name, source in {**learned, "batch_curiosity": "curiosity_agents"}.items():
+        x = win(learn_m[source], per)
         m = u.reshape(u.shape + (1,) * (x.ndim - 2)) > 0
         total = jnp.sum(jnp.where(m, x, 0.0), axis=1)
         n = n_upd.reshape(n_upd.shape + (1,) * (x.ndim - 2))

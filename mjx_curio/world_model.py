@@ -458,5 +458,6 @@ def learner_update(cfg: LearnerConfig, state: LearnerState, batch: Batch, key):
         "self_loss": self_l,
         "self_loss_agents": per_agent,  # [n_agents]
         "curiosity": jnp.mean(cur),
+        "curiosity_agents": jnp.mean(cur, axis=(0, 1)),  # [n_agents]
     }
     return new, metrics

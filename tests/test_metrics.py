@@ -39,6 +39,7 @@ def _steps(rng):
     u = t // UPDATE_EVERY
     learn_m = {k: rng.random(u).astype(np.float32) for k in ("vae_loss", "recon", "kl", "nll", "self_loss")}
     learn_m["self_loss_agents"] = rng.random((u, AGENTS)).astype(np.float32)
+    learn_m["curiosity_agents"] = rng.random((u, AGENTS)).astype(np.float32)
     learn_m["updated"] = (np.arange(u) >= 1).astype(np.int32)
     learn_m["non_finite"] = np.zeros(u, np.int32)
     return step_m, learn_m
@@ -89,3 +90,19 @@ def test_within_window_moments_and_curiosity_by_action_are_numpys(windows):
                     assert np.isnan(got["curiosity_by_action"][w, i, k])
     # the window of the halt holds its 3 steps taken, and the count of steps says so
     assert got["steps_taken"].tolist() == [W, W, 3, 0]
+
+
+def test_the_learners_metrics_are_means_over_the_windows_updates(windows):
+    """Each learner metric of a window is the mean over the updates done in it (the first update
+    slot holds none: replay had no sequence yet); the training batch's curiosity per agent."""
+    _, learn_m = _steps(np.random.default_rng(0))
+    _, got = windows
+    per = W // UPDATE_EVERY
+    for w in range(WINDOWS):
+        slots = np.arange(w * per, (w + 1) * per)
+        done = slots[learn_m["updated"][slots] > 0]
+        assert got["updates"][w] == len(done)
+        for name, source in (("nll", "nll"), ("self_loss_agents", "self_loss_agents"),
+                             ("batch_curiosity", "curiosity_agents")):
+            want = learn_m[source][done].astype(np.float64).mean(axis=0)
+            np.testing.assert_allclose(got[name][w], want, rtol=1e-6, err_msg=name)

@@ -294,10 +294,11 @@ def test_sharding_gives_every_device_its_own_runs_with_their_own_keys(tiny_sweep
 # an order that depends on how many threads a device has, and Adam turns last-bit gradient
 # differences near zero into steps of the learning rate's size. Measured on the first window of
 # the tiny sweep with the paper's network sizes, 2 devices vs 1 (AMD EPYC): nll 5.1e-4, self_loss
-# 1.7e-3, self_loss_agents 2.2e-3 relative; every other metric, curiosity included, equal. With
+# 1.7e-3, self_loss_agents 2.2e-3 relative; every other metric, curiosity included, equal (the
+# training batch's curiosity, recorded since, is computed from those latents as the nll is). With
 # TINY_SWEEP's small networks (Intel Xeon): every metric of every window equal but the predictions
 # (1.2e-7).
-LOSS_RTOL = {"nll": 1e-2, "self_loss": 1e-2, "self_loss_agents": 1e-2}
+LOSS_RTOL = {"nll": 1e-2, "self_loss": 1e-2, "self_loss_agents": 1e-2, "batch_curiosity": 1e-2}
 
 
 def assert_same_runs_on_other_devices(out, reference, what: str):
