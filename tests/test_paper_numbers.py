@@ -139,7 +139,7 @@ def test_readings_side_by_side_compares_two_sweeps_in_the_figures_windows():
         s.metrics["curiosity"][:] = per_run[:, None, None]
         s.metrics["curiosity_spread"][:] = 0.4
     t = pn.readings_side_by_side(a, b, ("A", "B"))
-    windows = [r[0] for r in t.rows[::2]]
+    windows = list(dict.fromkeys(r[0] for r in t.rows))
     assert windows == ["steps 0-1,000", "steps 4,000-6,000", "steps 10,000-12,000 (the last both ran)"]
     xa = a.metrics["curiosity"][:, 0, 0].astype(float)
     xb = b.metrics["curiosity"][:, 0, 0].astype(float)
@@ -151,3 +151,15 @@ def test_readings_side_by_side_compares_two_sweeps_in_the_figures_windows():
     assert t.rows[0][2] == "close to 1" and t.rows[1][2] == "—"
     with pytest.raises(ValueError, match="no curiosity levels"):
         pn.readings_side_by_side(a, b, ("A", "B"), figure="fig. 21")
+
+
+def test_side_by_side_shows_the_training_batches_curiosity_where_a_sweep_records_it():
+    a = fake_sweep("a", 1, [("eps", 0.2)], 300, seeds=2)
+    b = fake_sweep("b", 1, [("eps", 0.2)], 300, seeds=2)
+    del a.metrics["batch_curiosity"]  # made before the metric existed
+    b.metrics["batch_curiosity"][:] = 0.9
+    t = pn.readings_side_by_side(a, b, ("A", "B"))
+    rows = [r for r in t.rows if r[1] == "training batches' curiosity"]
+    assert len(rows) == 3 and all(r[3] == "—" and r[4].startswith("0.9 ") and r[5] == "—" for r in rows)
+    del b.metrics["batch_curiosity"]
+    assert all(r[1] != "training batches' curiosity" for r in pn.readings_side_by_side(a, b, ("A", "B")).rows)

@@ -243,45 +243,60 @@ def paper_numbers_table(sweeps, full_length: Mapping[str, tuple[Mapping, Mapping
 def readings_side_by_side(a: Sweep, b: Sweep, labels: tuple[str, str], figure: str = "fig. 8") -> Table:
     """Two sweeps of one figure's setting that differ in one setting (e.g. the VAE's layers),
     beside the paper's curiosity levels for that figure: per level reading of `READINGS` that both
-    sweeps reach, and over the last 2,000 steps both ran, each sweep's curiosity and the posterior
-    spread within it (each run's mean over the window's 1,000-step bins; mean over the runs of the
-    figure's policy [95 % CI]) and b minus a (Welch: [95 % CI], p). `labels` name a and b."""
+    sweeps reach, and over the last 2,000 steps both ran, each sweep's curiosity, the posterior
+    spread within it and, where a sweep records it, the curiosity of its training batches
+    (`batch_curiosity`, the statistic the authors' code logs in its place): each run's mean over
+    the window's 1,000-step bins; mean over the runs of the figure's policy [95 % CI], and b minus
+    a (Welch: [95 % CI], p) where both have it. `labels` name a and b."""
     from mjx_curio.analysis.significance import t_critical, welch_t
 
     readings = [r for r in READINGS if r.figure == figure and r.measure in ("level", "end")]
     if not readings:
         raise ValueError(f"figure={figure!r} has no curiosity levels among the paper's readings")
     policy = readings[0].policy
+    groups = {}
+    for s in (a, b):
+        groups[s.name] = paper_group(s, policy)
+        if groups[s.name] is None:
+            raise ValueError(f"{s.name} has no {POLICY_LABELS[policy]} runs in {figure}'s setting")
     reached = min(a.steps_done, b.steps_done)
     windows = [(r.what, r.paper, *r.args) for r in readings if r.measure == "level" and r.args[1] <= reached]
     last = reached // BIN_STEPS * BIN_STEPS
     if last < END_STEPS:
         raise ValueError(f"{a.name} and {b.name} have {reached:,} steps both; want {END_STEPS:,} or more")
     windows.append((f"curiosity, steps {last - END_STEPS:,}-{last:,} (the last both ran)", "—", last - END_STEPS, last))
+    metrics = [("curiosity", "curiosity"), ("curiosity_spread", "posterior spread"),
+               ("batch_curiosity", "training batches' curiosity")]
+    metrics = [(m, name) for m, name in metrics if m in a.metrics or m in b.metrics]
 
-    def per_run(s: Sweep, metric: str, start: int, end: int) -> np.ndarray:
-        group = paper_group(s, policy)
-        if group is None:
-            raise ValueError(f"{s.name} has no {POLICY_LABELS[policy]} runs in {figure}'s setting")
+    def per_run(s: Sweep, metric: str, start: int, end: int) -> np.ndarray | None:
+        if metric not in s.metrics:
+            return None
         steps, x = bin_windows(s, np.nanmean(s.metrics[metric].astype(float), axis=2), every=BIN_STEPS,
                                reduce="mean")
         bins = (np.asarray(steps) > start) & (np.asarray(steps) <= end)
-        return np.nanmean(x[np.ix_(group.indices, bins)], axis=1)
+        return np.nanmean(x[np.ix_(groups[s.name].indices, bins)], axis=1)
 
     cols = ["window", "what", "the paper (one run)", labels[0], labels[1], f"{labels[1]} − {labels[0]}", "p"]
     rows, values = [], []
     for what, paper, start, end in windows:
-        for metric, name in (("curiosity", "curiosity"), ("curiosity_spread", "posterior spread")):
+        for metric, name in metrics:
             xa, xb = per_run(a, metric, start, end), per_run(b, metric, start, end)
-            w = welch_t(xb, xa)
-            half = t_critical(w["df"]) * w["se"] if np.isfinite(w["se"]) else np.nan
-            window = what.split(", ", 1)[1]
-            rows.append([window, name, paper if metric == "curiosity" else "—", _mean_cell(xa)[0], _mean_cell(xb)[0],
-                         f"{w['diff']:+.3f} [{w['diff'] - half:+.3f}, {w['diff'] + half:+.3f}]", f"{w['p']:.2g}"])
-            values.append({"start": start, "end": end, "metric": metric, labels[0]: float(np.mean(xa)),
-                           labels[1]: float(np.mean(xb)), "diff": w["diff"], "p": w["p"]})
-    note = (f"{figure}'s setting ({POLICY_LABELS[policy]}): {labels[0]} is {a.name} ({len(paper_group(a, policy).indices)} "
-            f"runs, {a.steps_done:,} steps), {labels[1]} {b.name} ({len(paper_group(b, policy).indices)} runs, "
+            cells = [_mean_cell(x)[0] if x is not None else "—" for x in (xa, xb)]
+            value = {"start": start, "end": end, "metric": metric,
+                     labels[0]: float(np.mean(xa)) if xa is not None else None,
+                     labels[1]: float(np.mean(xb)) if xb is not None else None, "diff": None, "p": None}
+            diff = ["—", "—"]
+            if xa is not None and xb is not None:
+                w = welch_t(xb, xa)
+                half = t_critical(w["df"]) * w["se"] if np.isfinite(w["se"]) else np.nan
+                diff = [f"{w['diff']:+.3f} [{w['diff'] - half:+.3f}, {w['diff'] + half:+.3f}]", f"{w['p']:.2g}"]
+                value.update(diff=w["diff"], p=w["p"])
+            rows.append([what.split(", ", 1)[1], name, paper if metric == "curiosity" else "—", *cells, *diff])
+            values.append(value)
+    note = (f"{figure}'s setting ({POLICY_LABELS[policy]}): {labels[0]} is {a.name} ({len(groups[a.name].indices)} "
+            f"runs, {a.steps_done:,} steps), {labels[1]} {b.name} ({len(groups[b.name].indices)} runs, "
             f"{b.steps_done:,} steps). The posterior spread is the part of the curiosity that sampling the next "
-            f"view's latent adds (its expectation), the rest is the memory's error against the posterior mean.")
+            f"view's latent adds (its expectation), the rest is the memory's error against the posterior mean. "
+            f"The training batches' curiosity: —, a sweep made before it was recorded.")
     return Table(cols, rows, values, note)
