@@ -48,6 +48,12 @@ def samples_latent(sweep: Sweep) -> bool:
     return sweep.learner_config().z == "sample"
 
 
+def default_vae(sweep: Sweep) -> bool:
+    """Whether `sweep`'s VAE has the default layers: the tables that set one sweep against another
+    compare like with like (a side experiment with the authors' layers is read on its own)."""
+    return sweep.learner_config().vae_layers == "hs"
+
+
 def curiosity_parts(sweep: Sweep, group: Group) -> dict[str, np.ndarray]:
     """Per run of `group` and window, the agents' mean of each part of `PARTS`: {part: [runs, windows]}."""
     if not records_spread(sweep):
@@ -107,7 +113,7 @@ def agents_parts_table(presets: Mapping[str, Sweep]) -> Table:
     such sweep ran. Per part (`PARTS`): each run's mean over the second half of the steps both
     sweeps ran (claim 3's window), mean over runs [95 % CI] for one agent and for two (the mean of
     both agents), and Welch's t-test of two minus one."""
-    sampled = [(n, s) for n, s in presets.items() if records_spread(s) and samples_latent(s)]
+    sampled = [(n, s) for n, s in presets.items() if records_spread(s) and samples_latent(s) and default_vae(s)]
     cols = ["sweeps (one agent / two)", "policy", "part", "one agent", "runs", "two agents", "runs", "two minus one",
             "Welch p"]
     rows, values, steps = [], [], set()
@@ -151,7 +157,7 @@ def policies_parts_table(presets: Mapping[str, Sweep]) -> Table:
 
     found: dict[tuple[int, str], tuple[str, Sweep, Group]] = {}
     for name, s in presets.items():
-        if not (records_spread(s) and samples_latent(s)):
+        if not (records_spread(s) and samples_latent(s) and default_vae(s)):
             continue
         for g in s.groups():
             if np.isclose(g.value, PAPER_SETTING[g.policy]):
