@@ -399,7 +399,8 @@ def test_learner_config_rejects_bad_values(kw, knob):
 
 @pytest.mark.parametrize("kw, allowed", [(dict(curiosity="median"), ("'mean'", "'sum'")),
                                          (dict(z="mode"), ("'sample'", "'mean'")),
-                                         (dict(kl_tolerance=-0.5), (">= 0.0",))])
+                                         (dict(kl_tolerance=-0.5), (">= 0.0",)),
+                                         (dict(vae_layers="batchnorm"), ("'hs'", "'authors'"))])
 def test_fidelity_knobs_reject_bad_values_naming_the_knob_and_the_choices(kw, allowed):
     (name, value), = kw.items()
     with pytest.raises(ConfigError) as err:
