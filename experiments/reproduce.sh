@@ -113,6 +113,12 @@
 # numbers beside ours"), 4 seeds x 40,000 steps at 11.6-11.7 run-steps/s alone on the Intel Xeon
 # above (about 3 h 50 min, over two sessions), not run by this script:
 #     python -m mjx_curio.sweep preset=single_agent policies=eps seeds=4 steps=40000 vae_layers=authors checkpoint_every=1000 out=runs/paper/single_agent.authors_vae
+# Beside which the page sets fig. 8's setting run again with the default layers, the same seeds
+# and command as single_agent.spread on a later build that records the training batches'
+# curiosity too (the page also sets the two runs of the default layers side by side), 4 seeds x
+# 40,000 steps (1 h 18 min alone on the Intel Xeon above, 32-35 run-steps/s), not run by
+# this script:
+#     python -m mjx_curio.sweep preset=single_agent policies=eps seeds=4 steps=40000 checkpoint_every=1000 out=runs/paper/single_agent.batch_curiosity
 #
 # The paper's full scale (8 seeds, 80,000 steps, every preset) is a GPU job: install the CUDA
 # extra (pip install -e '.[cuda]') and run

@@ -877,6 +877,12 @@ def test_policies_parts_compare_each_part_over_the_whole_run():
     assert abs(rows["boltzmann", "eps", "error"]["diff"]) < 0.01 and abs(rows["ucb", "eps", "spread"]["diff"]) < 0.01
     # With one policy alone there is nothing to set against it.
     assert an.policies_parts_table({"single_agent.spread_boltzmann": boltz}).rows == []
+    # A later rerun of a policy's sweep, listed first, does not take its place.
+    rerun = fake_sweep("single_agent.batch_curiosity", 1, [("eps", 0.2)], 2000, seeds=4)
+    greedy.manifest["created"], rerun.manifest["created"] = "2026-01-01T00:00:00", "2026-02-01T00:00:00"
+    t = an.policies_parts_table({"single_agent.batch_curiosity": rerun, "single_agent.spread": greedy,
+                                 "single_agent.spread_boltzmann": boltz})
+    assert {v["against_sweep"] for v in t.values if v["against"] == "eps"} == {"single_agent.spread"}
 
 
 def test_rotations_less_on_planted_action_counts():

@@ -161,5 +161,9 @@ def test_side_by_side_shows_the_training_batches_curiosity_where_a_sweep_records
     t = pn.readings_side_by_side(a, b, ("A", "B"))
     rows = [r for r in t.rows if r[1] == "training batches' curiosity"]
     assert len(rows) == 3 and all(r[3] == "—" and r[4].startswith("0.9 ") and r[5] == "—" for r in rows)
+    assert "a sweep made before it was recorded" in t.note
+    both = pn.readings_side_by_side(b, b, ("B", "B again"))
+    assert "a sweep made before it was recorded" not in both.note
+    assert all(r[5] != "—" for r in both.rows if r[1] == "training batches' curiosity")
     del b.metrics["batch_curiosity"]
     assert all(r[1] != "training batches' curiosity" for r in pn.readings_side_by_side(a, b, ("A", "B")).rows)

@@ -41,7 +41,8 @@ def test_the_page_is_what_the_committed_metrics_give(results):
     page = results.PAGE.read_text()
     blocks = results.blocks(page)
     assert set(blocks) == {"scale", "figures", "claims", "paper_numbers", "history", "authors_memory", "vae_layers",
-                           "power", "curiosity_parts", "temperatures", "walls", "reconstructions", "full_length"}
+                           "rerun", "power", "curiosity_parts", "temperatures", "walls", "reconstructions",
+                           "full_length"}
     assert blocks["figures"] == results.figures_block(presets, out=None)
     if presets:  # the CSV's full-precision numbers may differ in the last bit on another CPU's NumPy
         _assert_same_csv(results.CLAIMS_CSV.read_text(), an.claims_table(presets).to_csv())
@@ -715,11 +716,13 @@ def test_reproduce_at_the_papers_seeds_runs_each_experiment_as_one_sweep():
     assert ".seeds-" not in done.stdout
 
 
-def test_the_vae_layers_block_sets_the_two_sweeps_side_by_side_or_says_what_is_missing(results):
+@pytest.mark.parametrize("block", ["vae_layers", "rerun"])
+def test_a_side_by_side_block_sets_its_two_sweeps_beside_each_other_or_says_what_is_missing(results, block):
     from test_claims import fake_sweep
 
-    a, b = (fake_sweep(name, 1, [("eps", 0.2)], 300, seeds=2) for name in results.VAE_LAYERS_SWEEPS)
-    assert "has not been snapshotted yet" in results.vae_layers_block({results.VAE_LAYERS_SWEEPS[0]: a})
-    block = results.vae_layers_block(dict(zip(results.VAE_LAYERS_SWEEPS, (a, b))))
-    assert block.startswith("| window | what | the paper (one run) | Ha & Schmidhuber's layers | the authors' layers |")
-    assert "steps 0-1,000" in block and "steps 4,000-6,000 (the last both ran)" in block
+    names, labels, _ = results.SIDE_BY_SIDE[block]
+    a, b = (fake_sweep(name, 1, [("eps", 0.2)], 300, seeds=2) for name in names)
+    assert f"{names[1]} has not been snapshotted yet" in results.side_by_side_block({names[0]: a}, block)
+    text = results.side_by_side_block(dict(zip(names, (a, b))), block)
+    assert text.startswith(f"| window | what | the paper (one run) | {labels[0]} | {labels[1]} |")
+    assert "steps 0-1,000" in text and "steps 4,000-6,000 (the last both ran)" in text

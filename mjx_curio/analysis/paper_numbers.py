@@ -297,6 +297,7 @@ def readings_side_by_side(a: Sweep, b: Sweep, labels: tuple[str, str], figure: s
     note = (f"{figure}'s setting ({POLICY_LABELS[policy]}): {labels[0]} is {a.name} ({len(groups[a.name].indices)} "
             f"runs, {a.steps_done:,} steps), {labels[1]} {b.name} ({len(groups[b.name].indices)} runs, "
             f"{b.steps_done:,} steps). The posterior spread is the part of the curiosity that sampling the next "
-            f"view's latent adds (its expectation), the rest is the memory's error against the posterior mean. "
-            f"The training batches' curiosity: —, a sweep made before it was recorded.")
+            f"view's latent adds (its expectation), the rest is the memory's error against the posterior mean.")
+    if any(m == "batch_curiosity" for m, _ in metrics) and not all("batch_curiosity" in s.metrics for s in (a, b)):
+        note += " The training batches' curiosity: —, a sweep made before it was recorded."
     return Table(cols, rows, values, note)
