@@ -150,7 +150,8 @@ def policies_parts_table(presets: Mapping[str, Sweep]) -> Table:
     """Claims 10 and 11 part by part: one policy against another with the same number of agents,
     each from a sweep that records the spread with sampled latents (z=sample), for the pairs of
     `POLICY_PAIRS` such sweeps ran (the paper's setting of each policy; the first made of the sweeps
-    that ran a policy where several did, so that a later rerun adds no silent change of sweep). Per part (`PARTS`): each run's mean over the whole run (claims 10 and
+    that ran a policy where several did, so that a later rerun adds no silent change of sweep).
+    Per part (`PARTS`): each run's mean over the whole run (claims 10 and
     11's measure; over the steps both sweeps ran), mean over runs [95 % CI] for each policy, and
     Welch's t-test of the first minus the second."""
     from mjx_curio.analysis.claims import PAPER_SETTING
