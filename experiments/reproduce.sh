@@ -111,8 +111,9 @@
 # And fig. 8's setting with the authors' VAE layers (batch normalisation, leaky ReLUs, their wider
 # decoder; the same seeds as single_agent.spread, beside which the page sets it under "The paper's
 # numbers beside ours"), 4 seeds x 40,000 steps at 19 run-steps/s alone on the Intel Xeon above
-# on a quiet hour, 16.8 on average over 35,100 steps of a slowing one (2 h 20 min to 2 h 40 min;
-# 11.6-11.7 run-steps/s before their last layer became matmuls), not run by this script:
+# on a quiet hour, 16.6 on average over 39,000 steps of slower ones (2 h 40 min of stepping in
+# three sessions; 11.6-11.7 run-steps/s before their last layer became matmuls), not run by this
+# script:
 #     python -m mjx_curio.sweep preset=single_agent policies=eps seeds=4 steps=40000 vae_layers=authors checkpoint_every=1000 out=runs/paper/single_agent.authors_vae
 # Beside which the page sets fig. 8's setting run again with the default layers, the same seeds
 # and command as single_agent.spread on a later build that records the training batches'
