@@ -2,6 +2,8 @@
 
 import mjx_curio  # noqa: F401  (XLA flags before JAX initialises)
 
+import functools
+
 import jax
 import jax.numpy as jnp
 import numpy as np
@@ -12,6 +14,8 @@ from jax import lax
 from mjx_curio import nets
 from mjx_curio import world_model as wm
 from mjx_curio.config import ConfigError, LearnerConfig
+
+from conftest import USERS_CODEGEN
 
 DN = ("NHWC", "HWIO", "NHWC")
 
@@ -329,7 +333,8 @@ def _train_vae(cfg, train, held, rng, steps: int = 600):
     st = wm.init_learner(cfg, jax.random.PRNGKey(0))
     opt = wm.optimizer(cfg)
 
-    @jax.jit
+    # 600 steps: compiled as users' runs are, they run several times faster (conftest.py).
+    @functools.partial(jax.jit, compiler_options=USERS_CODEGEN)
     def step(p, s, stats, idx, i):  # stats: batch normalisation's running averages, if any
         key = jax.random.fold_in(jax.random.PRNGKey(2), i)
         (_, aux), g = jax.value_and_grad(lambda p: wm.vae_loss_and_posterior(cfg, p, train[idx], key, stats),
