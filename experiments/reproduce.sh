@@ -110,15 +110,15 @@
 #     python experiments/spread_evidence.py runs/paper/multi_agent.z_mean
 # And fig. 8's setting with the authors' VAE layers (batch normalisation, leaky ReLUs, their wider
 # decoder; the same seeds as single_agent.spread, beside which the page sets it under "The paper's
-# numbers beside ours"), 4 seeds x 40,000 steps at 19 run-steps/s alone on the Intel Xeon above
-# on a quiet hour, 16.6 on average over 39,000 steps of slower ones (2 h 40 min of stepping in
-# three sessions; 11.6-11.7 run-steps/s before their last layer became matmuls), not run by this
-# script:
+# numbers beside ours"), 4 seeds x 40,000 steps at 19 run-steps/s alone on a 2-core Intel Xeon
+# @ 2.80GHz (lscpu family 6 model 106) on a quiet hour, 16.6 on average over 39,000 steps of
+# slower ones (2 h 40 min of stepping in three sessions; 11.6-11.7 run-steps/s on the Intel Xeon
+# above before their last layer became matmuls), not run by this script:
 #     python -m mjx_curio.sweep preset=single_agent policies=eps seeds=4 steps=40000 vae_layers=authors checkpoint_every=1000 out=runs/paper/single_agent.authors_vae
 # Beside which the page sets fig. 8's setting run again with the default layers, the same seeds
 # and command as single_agent.spread on a later build that records the training batches'
 # curiosity too (the page also sets the two runs of the default layers side by side), 4 seeds x
-# 40,000 steps (1 h 18 min alone on the Intel Xeon above, 32-35 run-steps/s), not run by
+# 40,000 steps (1 h 18 min alone on the Intel Xeon @ 2.80GHz, 32-35 run-steps/s), not run by
 # this script:
 #     python -m mjx_curio.sweep preset=single_agent policies=eps seeds=4 steps=40000 checkpoint_every=1000 out=runs/paper/single_agent.batch_curiosity
 #
