@@ -2,10 +2,11 @@
 # Remake every sweep and figure of docs/results.md from nothing.
 #
 #     bash experiments/reproduce.sh      # the scale of docs/results.md: 3 seeds (8 for the
-#                                        # two-agent and the one-agent experiment and for
-#                                        # one and two agents with different walls); 40,000
-#                                        # steps a run with one or two agents and for the
-#                                        # temperatures, 15,000 for the wall variants
+#                                        # two-agent experiment and for one and two agents
+#                                        # with different walls, 11 for the one-agent one,
+#                                        # 6 for the paper's temperatures); 40,000 steps a run
+#                                        # with one or two agents and for the temperatures,
+#                                        # 15,000 for the wall variants
 #     SEEDS=8 STEPS=80000 bash experiments/reproduce.sh
 #                                        # the paper's full scale (see below)
 #
@@ -17,16 +18,19 @@
 # starting over. Asking for more steps later continues the same sweeps further. Then the metrics are
 # copied into experiments/results/ and the page's figures and tables are redrawn from them.
 #
-# Seeds: SEEDS (default 3) per policy or setting of every preset; the two-agent experiment
-# (multi_agent) has MULTI_SEEDS (default 8) in all and the one-agent experiment (single_agent)
-# SINGLE_SEEDS (default 8), and one agent with a different texture on every wall
-# (single_agent_walls_different) SINGLE_WALL_SEEDS (default 8), and two agents with a different
-# texture on every wall (multi_agent_walls_different) MULTI_WALL_SEEDS (default 8), and the paper's
-# Boltzmann temperatures (boltzmann_temperatures) TEMPERATURE_SEEDS (default 6): the first SEEDS in
-# runs/paper/<preset> and the rest, as they ran for the page, in sweeps of their own of at most 3
-# seeds each (runs/paper/<preset>.seeds-3-5 and runs/paper/<preset>.seeds-6-7: most fit a 3-hour
-# session on 2 cores; the 15 runs of a temperature part take three), which the page reads with the
-# first as one experiment (analysis.merge_sweeps).
+# Seeds: SEEDS (default 3) per policy or setting of every preset; at the page's scale (SEEDS not
+# given) the two-agent experiment (multi_agent) has MULTI_SEEDS (default 8) in all and the
+# one-agent experiment (single_agent) SINGLE_SEEDS (default 11), and one agent with a different
+# texture on every wall (single_agent_walls_different) SINGLE_WALL_SEEDS (default 8), and two agents
+# with a different texture on every wall (multi_agent_walls_different) MULTI_WALL_SEEDS (default
+# 8), and the paper's Boltzmann temperatures (boltzmann_temperatures) TEMPERATURE_SEEDS (default
+# 6); SEEDS, when given, sets them all, and each of those knobs wins over it, as with the run
+# lengths. The first SEEDS run in runs/paper/<preset> and the rest, as they ran for the page, in
+# sweeps of their own of at most 3 seeds each (runs/paper/<preset>.seeds-3-5,
+# runs/paper/<preset>.seeds-6-7 and, for the one-agent experiment, which grew from 8 seeds to 11,
+# runs/paper/single_agent.seeds-8-10: most fit a 3-hour session on 2 cores; the 15 runs of a
+# temperature part take three), which the page reads with the first as one experiment
+# (analysis.merge_sweeps).
 #
 # Wall time on a 2-core AMD EPYC (lscpu "AMD EPYC", family 25 model 1), CPU only, one sweep at a
 # time, measured from the sweeps' own progress lines (run-steps/s = runs x steps per second):
@@ -37,6 +41,7 @@
 #   single_agent   9 runs x 40,000 steps   3 h 16 min (1 h 14 min to 15,000 steps, then 15,000-40,000 in 2 h 2 min at 30.8 run-steps/s)
 #   single_agent.seeds-3-5  9 runs x 40,000 steps   2 h 7 min (45-47 run-steps/s), on the 2-core Intel Xeon above: not comparable with the AMD rows
 #   single_agent.seeds-6-7  6 runs x 40,000 steps   1 h 6 min (61 run-steps/s; 46 while a test ran beside it), on the same Intel Xeon
+#   single_agent.seeds-8-10  9 runs x 40,000 steps   3 h 40 min over 2 sessions (22,000 steps in 2 h 11 min at 23.7-25.5 run-steps/s with tests and a CI run beside it, 22,000-40,000 in 1 h 29 min at 30 alone), on a 2-core Intel Xeon @ 2.80GHz (lscpu family 6 model 106)
 #   boltzmann_temperatures  15 runs x 40,000 steps   9 h 5 min (7,000 steps in 1 h 57 min at 15.3 run-steps/s, 7,000-26,000 in 4 h 22 min at 18.1, 26,000-40,000 in 2 h 47 min at 21.0)
 #   boltzmann_temperatures.seeds-3-5  15 runs x 40,000 steps   8 h 32 min in eight stretches (23-27 run-steps/s alone, 13-28 with tests and analysis beside it), on the Intel Xeon above
 #   boltzmann_low_temperatures  12 runs x 40,000 steps   7 h 37 min (14,000 steps in 2 h 28 min, 14,000-28,000 in 2 h 51 min, 28,000-40,000 in 2 h 18 min at 17.4 run-steps/s; 15-19 throughout)
@@ -131,12 +136,13 @@
 set -euo pipefail
 cd "$(dirname "$0")/.."
 PY=${PYTHON:-.venv/bin/python}
+SEEDS_GIVEN=${SEEDS:-}
 SEEDS=${SEEDS:-3}
-MULTI_SEEDS=${MULTI_SEEDS:-8}
-SINGLE_SEEDS=${SINGLE_SEEDS:-8}
-SINGLE_WALL_SEEDS=${SINGLE_WALL_SEEDS:-8}
-MULTI_WALL_SEEDS=${MULTI_WALL_SEEDS:-8}
-TEMPERATURE_SEEDS=${TEMPERATURE_SEEDS:-6}
+MULTI_SEEDS=${MULTI_SEEDS:-${SEEDS_GIVEN:-8}}
+SINGLE_SEEDS=${SINGLE_SEEDS:-${SEEDS_GIVEN:-11}}
+SINGLE_WALL_SEEDS=${SINGLE_WALL_SEEDS:-${SEEDS_GIVEN:-8}}
+MULTI_WALL_SEEDS=${MULTI_WALL_SEEDS:-${SEEDS_GIVEN:-8}}
+TEMPERATURE_SEEDS=${TEMPERATURE_SEEDS:-${SEEDS_GIVEN:-6}}
 STEPS=${STEPS:-}
 MULTI_STEPS=${MULTI_STEPS:-${STEPS:-40000}}
 SINGLE_STEPS=${SINGLE_STEPS:-${STEPS:-40000}}
@@ -160,13 +166,17 @@ sweep() {  # sweep PRESET STEPS [FIRST_SEED SEEDS OUT]: start it, or continue it
         checkpoint_every=1000 out="$out" resume="$resume"
 }
 
-seed_parts() {  # seed_parts PRESET STEPS TOTAL PARTS: SEEDS seeds in runs/paper/PRESET, the rest up to TOTAL 3 at most a sweep; PARTS names an array that gets every sweep's folder
-    local preset=$1 steps=$2 total=$3 first=$SEEDS n
+seed_parts() {  # seed_parts PRESET STEPS TOTAL PARTS [FIRST...]: SEEDS seeds in runs/paper/PRESET, the rest up to TOTAL 3 at most a sweep and a new sweep at every FIRST (where the page's experiment grew); PARTS names an array that gets every sweep's folder
+    local preset=$1 steps=$2 total=$3 first=$SEEDS n grew
     local -n folders=$4
+    local starts=("${@:5}")
     sweep "$preset" "$steps"
     folders=("runs/paper/$preset")
     while (( first < total )); do
         n=$(( total - first < 3 ? total - first : 3 ))
+        for grew in "${starts[@]}"; do
+            (( grew > first && grew < first + n )) && n=$(( grew - first ))
+        done
         folders+=("runs/paper/$preset.seeds-$first-$(( first + n - 1 ))")
         sweep "$preset" "$steps" "$first" "$n" "${folders[-1]}"
         first=$(( first + n ))
@@ -174,7 +184,7 @@ seed_parts() {  # seed_parts PRESET STEPS TOTAL PARTS: SEEDS seeds in runs/paper
 }
 
 seed_parts multi_agent "$MULTI_STEPS" "$MULTI_SEEDS" multi_parts
-seed_parts single_agent "$SINGLE_STEPS" "$SINGLE_SEEDS" single_parts
+seed_parts single_agent "$SINGLE_STEPS" "$SINGLE_SEEDS" single_parts 8  # seeds 8-10 came later
 seed_parts boltzmann_temperatures "$TEMPERATURE_STEPS" "$TEMPERATURE_SEEDS" temperature_parts
 sweep boltzmann_low_temperatures "$TEMPERATURE_STEPS"
 seed_parts single_agent_walls_different "$WALL_STEPS" "$SINGLE_WALL_SEEDS" wall_parts

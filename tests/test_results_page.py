@@ -663,12 +663,13 @@ def test_reproduce_run_lengths_per_sweep_and_steps_for_all(settings, want):
     got = {m[1]: int(m[2]) for m in re.finditer(r"preset=(\S+) seeds=3 first_seed=0 steps=(\d+)", done.stdout)}
     assert got == want
     # The one-agent, two-agent, temperature and both wall experiments' later seeds as they ran for the page:
-    # sweeps of their own beside the first.
+    # sweeps of their own beside the first, the one-agent experiment's seeds 8-10 apart from 6-7 (added later).
     parts = re.findall(r"preset=(\w+) seeds=(\d) first_seed=([1-9]) steps=(\d+) .* out=(\S+)", done.stdout)
     assert parts == [("multi_agent", "3", "3", str(want["multi_agent"]), "runs/paper/multi_agent.seeds-3-5"),
                      ("multi_agent", "2", "6", str(want["multi_agent"]), "runs/paper/multi_agent.seeds-6-7"),
                      ("single_agent", "3", "3", str(want["single_agent"]), "runs/paper/single_agent.seeds-3-5"),
                      ("single_agent", "2", "6", str(want["single_agent"]), "runs/paper/single_agent.seeds-6-7"),
+                     ("single_agent", "3", "8", str(want["single_agent"]), "runs/paper/single_agent.seeds-8-10"),
                      ("boltzmann_temperatures", "3", "3", str(want["boltzmann_temperatures"]),
                       "runs/paper/boltzmann_temperatures.seeds-3-5"),
                      ("single_agent_walls_different", "3", "3", str(want["single_agent_walls_different"]),
@@ -684,7 +685,7 @@ def test_reproduce_run_lengths_per_sweep_and_steps_for_all(settings, want):
     assert evidence == [("temperature", "boltzmann_temperatures"), ("temperature", "boltzmann_temperatures.seeds-3-5"),
                         ("temperature", "boltzmann_low_temperatures"),
                         ("reconstruction", "single_agent"), ("reconstruction", "single_agent.seeds-3-5"),
-                        ("reconstruction", "single_agent.seeds-6-7"),
+                        ("reconstruction", "single_agent.seeds-6-7"), ("reconstruction", "single_agent.seeds-8-10"),
                         ("reconstruction", "single_agent_walls_different"),
                         ("reconstruction", "single_agent_walls_different.seeds-3-5"),
                         ("reconstruction", "single_agent_walls_different.seeds-6-7"),
@@ -714,6 +715,25 @@ def test_reproduce_at_the_papers_seeds_runs_each_experiment_as_one_sweep():
     assert re.findall(r"preset=single_agent seeds=(\d) first_seed=(\d)", done.stdout) == [("8", "0")]
     assert re.findall(r"preset=boltzmann_temperatures seeds=(\d) first_seed=(\d)", done.stdout) == [("8", "0")]
     assert ".seeds-" not in done.stdout
+
+
+def test_reproduce_seeds_sets_every_experiment_and_each_experiments_own_knob_wins():
+    import os
+    import re
+    import subprocess
+
+    env = {k: v for k, v in os.environ.items()
+           if k not in ("MULTI_SEEDS", "SINGLE_SEEDS", "SINGLE_WALL_SEEDS", "MULTI_WALL_SEEDS", "TEMPERATURE_SEEDS", "STEPS")}
+    env.update(SEEDS="3", SINGLE_SEEDS="10", PYTHON="echo")
+    done = subprocess.run(["bash", str(ROOT / "experiments" / "reproduce.sh")], env=env, capture_output=True,
+                          text=True, timeout=60)
+    assert done.returncode == 0, done.stderr
+    assert re.findall(r"preset=multi_agent seeds=(\d) first_seed=(\d)", done.stdout) == [("3", "0")]
+    # 10 one-agent seeds: parts of at most 3, a new one where the page's experiment grew (seed 8)
+    assert re.findall(r"preset=single_agent seeds=(\d) first_seed=(\d) .* out=(\S+)", done.stdout) == [
+        ("3", "0", "runs/paper/single_agent"), ("3", "3", "runs/paper/single_agent.seeds-3-5"),
+        ("2", "6", "runs/paper/single_agent.seeds-6-7"), ("2", "8", "runs/paper/single_agent.seeds-8-9")]
+    assert ".seeds-" not in done.stdout.replace("single_agent.seeds-", "")
 
 
 @pytest.mark.parametrize("block", ["vae_layers", "rerun"])
