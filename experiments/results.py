@@ -21,9 +21,9 @@ sweeps, the figures with their captions, the claims table (`analysis.claims_tabl
 numbers the paper reads off its figures beside ours (`analysis.paper_numbers_table`, with a
 column for the full-length sweeps) and the curiosity from a zero memory carry (from
 docs/results/history.json, which `history_evidence.py` writes) and from the authors' memory
-(docs/results/authors_memory.json, which `authors_memory_evidence.py` writes), fig. 8's setting
-with the authors' VAE layers beside Ha and Schmidhuber's, and run again beside its first run
-(`analysis.readings_side_by_side`), the seeds each claim's tests need (`analysis.power_table`), claim 1's fall and rise taken apart
+(docs/results/authors_memory.json, which `authors_memory_evidence.py` writes), fig. 8's and fig.
+17's settings with the authors' VAE layers beside Ha and Schmidhuber's, and fig. 8's run again
+beside its first run (`analysis.readings_side_by_side`), the seeds each claim's tests need (`analysis.power_table`), claim 1's fall and rise taken apart
 into the world model's error and the posterior's spread (`analysis.curiosity_parts_table`), the
 Boltzmann temperatures measure by measure (`analysis.temperature_table`), different walls against identical ones
 (`analysis.walls_table`) and the reconstructions' quality over training (from
@@ -382,31 +382,35 @@ def authors_memory_block(path: pathlib.Path = AUTHORS_MEMORY) -> str:
                                                       "memory yet (`experiments/authors_memory_evidence.py`).\n")
 
 
-# Fig. 8's setting twice on the same seeds, one thing apart: page block -> the two sweeps, their
-# labels and what the second one is. Its rerun (a later build, so a chaotically different but
-# equally likely trajectory per seed) records the training batches' curiosity, which the first
-# predates, so it is the default layers' side against the authors'.
+# A figure's setting twice on the same seeds, one thing apart: page block -> the two sweeps, their
+# labels, what the second one is and the figure whose setting both run. The one-agent rerun of
+# fig. 8 (a later build, so a chaotically different but equally likely trajectory per seed)
+# records the training batches' curiosity, which the first predates, so it is the default layers'
+# side against the authors'.
 SIDE_BY_SIDE = {
     "vae_layers": (("single_agent.batch_curiosity", "single_agent.authors_vae"),
                    ("Ha & Schmidhuber's layers", "the authors' layers"),
-                   "the side experiment with the authors' VAE layers"),
+                   "the side experiment with the authors' VAE layers", "fig. 8"),
     "rerun": (("single_agent.spread", "single_agent.batch_curiosity"),
               ("the first run", "the rerun"),
-              "fig. 8's setting run again"),
+              "fig. 8's setting run again", "fig. 8"),
+    "vae_layers_two_agents": (("multi_agent.spread", "multi_agent.authors_vae"),
+                              ("Ha & Schmidhuber's layers", "the authors' layers"),
+                              "the two-agent side experiment with the authors' VAE layers", "fig. 17"),
 }
 
 
 def side_by_side_block(presets: dict, block: str) -> str:
-    """One of `SIDE_BY_SIDE`'s pairs in fig. 8's windows (`analysis.readings_side_by_side`), or
-    which sweep is still missing."""
+    """One of `SIDE_BY_SIDE`'s pairs in its figure's windows (`analysis.readings_side_by_side`),
+    or which sweep is still missing."""
     from mjx_curio import analysis as an
 
-    names, labels, what = SIDE_BY_SIDE[block]
+    names, labels, what, figure = SIDE_BY_SIDE[block]
     missing = [name for name in names if name not in presets]
     if missing:
         return (f"{what[0].upper()}{what[1:]} ({names[1]}, beside {names[0]}): {', '.join(missing)} "
                 "has not been snapshotted yet.\n")
-    return an.readings_side_by_side(*(presets[name] for name in names), labels).to_markdown()
+    return an.readings_side_by_side(*(presets[name] for name in names), labels, figure).to_markdown()
 
 
 def _device(d: dict | list) -> str:

@@ -153,6 +153,20 @@ def test_readings_side_by_side_compares_two_sweeps_in_the_figures_windows():
         pn.readings_side_by_side(a, b, ("A", "B"), figure="fig. 21")
 
 
+def test_side_by_side_reads_the_window_where_the_papers_curve_is_lowest():
+    """Fig. 17 has one level (steps 0-1,000) and a lowest point (its box, steps 20,000-25,000):
+    both are windows once the sweeps reach them, in order of their steps, the paper's number
+    beside each."""
+    a, b = (fake_sweep(name, 2, [("eps", 0.2)], 1_400, seeds=3) for name in "ab")  # 28,000 steps
+    t = pn.readings_side_by_side(a, b, ("A", "B"), figure="fig. 17")
+    curiosity = [r for r in t.rows if r[1] == "curiosity"]
+    assert [r[0] for r in curiosity] == ["steps 0-1,000", "steps 20,000-25,000 (the paper's lowest)",
+                                         "steps 26,000-28,000 (the last both ran)"]
+    assert [r[2] for r in curiosity] == ["0.7", "about 0.53", "—"]
+    short = fake_sweep("short", 2, [("eps", 0.2)], 1_200, seeds=3)  # 24,000 steps: short of the trough's end
+    assert all("lowest" not in r[0] for r in pn.readings_side_by_side(a, short, ("A", "S"), figure="fig. 17").rows)
+
+
 def test_side_by_side_shows_the_training_batches_curiosity_where_a_sweep_records_it():
     a = fake_sweep("a", 1, [("eps", 0.2)], 300, seeds=2)
     b = fake_sweep("b", 1, [("eps", 0.2)], 300, seeds=2)

@@ -243,7 +243,8 @@ def paper_numbers_table(sweeps, full_length: Mapping[str, tuple[Mapping, Mapping
 def readings_side_by_side(a: Sweep, b: Sweep, labels: tuple[str, str], figure: str = "fig. 8") -> Table:
     """Two sweeps of one figure's setting that differ in one setting (e.g. the VAE's layers),
     beside the paper's curiosity levels for that figure: per level reading of `READINGS` that both
-    sweeps reach, and over the last 2,000 steps both ran, each sweep's curiosity, the posterior
+    sweeps reach, in the window where the paper's curve is lowest (its `lowest` reading's box)
+    where both reach it, and over the last 2,000 steps both ran, each sweep's curiosity, the posterior
     spread within it and, where a sweep records it, the curiosity of its training batches
     (`batch_curiosity`, the statistic the authors' code logs in its place): each run's mean over
     the window's 1,000-step bins; mean over the runs of the figure's policy [95 % CI], and b minus
@@ -260,7 +261,12 @@ def readings_side_by_side(a: Sweep, b: Sweep, labels: tuple[str, str], figure: s
         if groups[s.name] is None:
             raise ValueError(f"{s.name} has no {POLICY_LABELS[policy]} runs in {figure}'s setting")
     reached = min(a.steps_done, b.steps_done)
-    windows = [(r.what, r.paper, *r.args) for r in readings if r.measure == "level" and r.args[1] <= reached]
+    # A level as its window; the lowest point as the window where the paper's curve is lowest.
+    windows = sorted([(r.what, r.paper, *r.args) for r in readings if r.measure == "level"]
+                     + [(f"curiosity, steps {r.box[0]:,}-{r.box[1]:,} (the paper's lowest)", r.paper, *r.box[:2])
+                        for r in READINGS if r.figure == figure and r.measure == "lowest" and r.box],
+                     key=lambda w: w[2])
+    windows = [w for w in windows if w[3] <= reached]
     last = reached // BIN_STEPS * BIN_STEPS
     if last < END_STEPS:
         raise ValueError(f"{a.name} and {b.name} have {reached:,} steps both; want {END_STEPS:,} or more")
