@@ -161,10 +161,32 @@ def test_side_by_side_reads_the_window_where_the_papers_curve_is_lowest():
     t = pn.readings_side_by_side(a, b, ("A", "B"), figure="fig. 17")
     curiosity = [r for r in t.rows if r[1] == "curiosity"]
     assert [r[0] for r in curiosity] == ["steps 0-1,000", "steps 20,000-25,000 (the paper's lowest)",
-                                         "steps 26,000-28,000 (the last both ran)"]
-    assert [r[2] for r in curiosity] == ["0.7", "about 0.53", "—"]
+                                         "steps 26,000-28,000 (the last both ran)", "the lowest bin, steps 0-28,000"]
+    assert [r[2] for r in curiosity] == ["0.7", "about 0.53", "—", "about 0.53"]
     short = fake_sweep("short", 2, [("eps", 0.2)], 1_200, seeds=3)  # 24,000 steps: short of the trough's end
-    assert all("lowest" not in r[0] for r in pn.readings_side_by_side(a, short, ("A", "S"), figure="fig. 17").rows)
+    rows = pn.readings_side_by_side(a, short, ("A", "S"), figure="fig. 17").rows
+    assert all("paper's lowest" not in r[0] for r in rows)
+
+
+def test_side_by_side_finds_each_runs_lowest_bin_over_the_steps_both_ran():
+    """Planted dips: a's runs lowest in the bin of steps 10,000-11,000, b's in 20,000-21,000 at
+    other depths; a dip of b's beyond a's last step is not read."""
+    a = fake_sweep("a", 2, [("eps", 0.2)], 1_400, seeds=3)  # 28,000 steps
+    b = fake_sweep("b", 2, [("eps", 0.2)], 1_600, seeds=3)  # 32,000 steps
+    for s in (a, b):
+        s.metrics["curiosity"][:] = 0.6
+    a.metrics["curiosity"][:, 500:550] = np.array([0.2, 0.3, 0.4])[:, None, None]
+    b.metrics["curiosity"][:, 1000:1050] = np.array([0.4, 0.45, 0.5])[:, None, None]
+    b.metrics["curiosity"][:, 1450:1500] = 0.0  # steps 29,000-30,000: after a's end
+    t = pn.readings_side_by_side(a, b, ("A", "B"), figure="fig. 17")
+    level, step = [(r, v) for r, v in zip(t.rows, t.values) if r[0] == "the lowest bin, steps 0-28,000"]
+    assert level[0][1:3] == ["curiosity", "about 0.53"]
+    assert step[0][1:3] == ["its step (the bin's middle)", "20,000-25,000"]
+    assert level[1]["A"] == pytest.approx(0.3) and level[1]["B"] == pytest.approx(0.45)
+    assert level[1]["p"] == pytest.approx(welch_t([0.4, 0.45, 0.5], [0.2, 0.3, 0.4])["p"])
+    assert step[1]["A"] == 10_500 and step[1]["B"] == 20_500 and step[1]["diff"] == 10_000
+    assert step[0][3] == "10,500 [10,500, 10,500] (runs: 10,500-10,500)" and step[0][5].startswith("+10,000")
+    assert not any("lowest bin" in r[0] for r in pn.readings_side_by_side(a, b, ("A", "B")).rows)  # fig. 8: none
 
 
 def test_side_by_side_shows_the_training_batches_curiosity_where_a_sweep_records_it():

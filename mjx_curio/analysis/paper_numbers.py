@@ -146,6 +146,11 @@ def _lowest_bins(cv, runs) -> tuple[np.ndarray, np.ndarray] | None:
     return np.where(some, c[np.arange(len(runs)), i], np.nan), np.where(some, middle, np.nan)
 
 
+def _lowest_step_cell(at) -> str:
+    m, lo, hi, _ = mean_ci(np.asarray(at, float))
+    return f"{m:,.0f} [{lo:,.0f}, {hi:,.0f}] (runs: {np.nanmin(at):,.0f}-{np.nanmax(at):,.0f})"
+
+
 def _lowest(cv, runs, ucb):
     lowest = _lowest_bins(cv, runs)
     return None if lowest is None else _mean_cell(lowest[0])
@@ -155,9 +160,7 @@ def _lowest_step(cv, runs, ucb):
     lowest = _lowest_bins(cv, runs)
     if lowest is None:
         return None
-    at = lowest[1]
-    m, lo, hi, _ = mean_ci(at)
-    return f"{m:,.0f} [{lo:,.0f}, {hi:,.0f}] (runs: {np.nanmin(at):,.0f}-{np.nanmax(at):,.0f})", float(m)
+    return _lowest_step_cell(lowest[1]), float(np.nanmean(lowest[1]))
 
 
 def _share_of_ucb(cv, runs, ucb, key):
@@ -248,7 +251,9 @@ def readings_side_by_side(a: Sweep, b: Sweep, labels: tuple[str, str], figure: s
     spread within it and, where a sweep records it, the curiosity of its training batches
     (`batch_curiosity`, the statistic the authors' code logs in its place): each run's mean over
     the window's 1,000-step bins; mean over the runs of the figure's policy [95 % CI], and b minus
-    a (Welch: [95 % CI], p) where both have it. `labels` name a and b."""
+    a (Welch: [95 % CI], p) where both have it. Where the paper reads the figure's lowest point,
+    also each run's lowest 1,000-step bin after the first, over the steps both ran, and the bin's
+    middle step, as `paper_numbers_table` reads them. `labels` name a and b."""
     from mjx_curio.analysis.significance import t_critical, welch_t
 
     readings = [r for r in READINGS if r.figure == figure and r.measure in ("level", "end")]
@@ -283,27 +288,54 @@ def readings_side_by_side(a: Sweep, b: Sweep, labels: tuple[str, str], figure: s
         bins = (np.asarray(steps) > start) & (np.asarray(steps) <= end)
         return np.nanmean(x[np.ix_(groups[s.name].indices, bins)], axis=1)
 
+    def lowest(s: Sweep) -> tuple[np.ndarray, np.ndarray]:
+        """Each run's lowest 1,000-step bin of curiosity after the first, over the steps both ran,
+        and its bin's middle step (`_lowest_bins`, as the paper's readings take it)."""
+        cv = run_curves(s)
+        keep = cv["steps"] <= last
+        return _lowest_bins({"steps": cv["steps"][keep], "runs": cv["runs"][:, keep]}, list(groups[s.name].indices))
+
     cols = ["window", "what", "the paper (one run)", labels[0], labels[1], f"{labels[1]} − {labels[0]}", "p"]
     rows, values = [], []
+
+    def add(window: str, name: str, paper: str, metric: str, start: int, end: int, xa, xb,
+            cell=lambda x: _mean_cell(x)[0], fmt: str = ".3f"):
+        """A row: each side's runs `xa`, `xb` (None: the sweep lacks the metric) as `cell` writes
+        them, and b - a with its interval in `fmt`."""
+        cells = [cell(x) if x is not None else "—" for x in (xa, xb)]
+        value = {"start": start, "end": end, "metric": metric,
+                 labels[0]: float(np.nanmean(xa)) if xa is not None else None,
+                 labels[1]: float(np.nanmean(xb)) if xb is not None else None, "diff": None, "p": None}
+        diff = ["—", "—"]
+        if xa is not None and xb is not None:
+            w = welch_t(xb, xa)
+            half = t_critical(w["df"]) * w["se"] if np.isfinite(w["se"]) else np.nan
+            diff = [f"{w['diff']:+{fmt}} [{w['diff'] - half:+{fmt}}, {w['diff'] + half:+{fmt}}]", f"{w['p']:.2g}"]
+            value.update(diff=w["diff"], p=w["p"])
+        rows.append([window, name, paper, *cells, *diff])
+        values.append(value)
+
     for what, paper, start, end in windows:
         for metric, name in metrics:
-            xa, xb = per_run(a, metric, start, end), per_run(b, metric, start, end)
-            cells = [_mean_cell(x)[0] if x is not None else "—" for x in (xa, xb)]
-            value = {"start": start, "end": end, "metric": metric,
-                     labels[0]: float(np.mean(xa)) if xa is not None else None,
-                     labels[1]: float(np.mean(xb)) if xb is not None else None, "diff": None, "p": None}
-            diff = ["—", "—"]
-            if xa is not None and xb is not None:
-                w = welch_t(xb, xa)
-                half = t_critical(w["df"]) * w["se"] if np.isfinite(w["se"]) else np.nan
-                diff = [f"{w['diff']:+.3f} [{w['diff'] - half:+.3f}, {w['diff'] + half:+.3f}]", f"{w['p']:.2g}"]
-                value.update(diff=w["diff"], p=w["p"])
-            rows.append([what.split(", ", 1)[1], name, paper if metric == "curiosity" else "—", *cells, *diff])
-            values.append(value)
+            add(what.split(", ", 1)[1], name, paper if metric == "curiosity" else "—", metric, start, end,
+                per_run(a, metric, start, end), per_run(b, metric, start, end))
+    lows = [r for r in READINGS if r.figure == figure and r.measure in ("lowest", "lowest_step")]
+    if lows:
+        la, lb = lowest(a), lowest(b)
+        for r in lows:
+            window = f"the lowest bin, steps 0-{last:,}"
+            if r.measure == "lowest":
+                add(window, "curiosity", r.paper, r.measure, 0, last, la[0], lb[0])
+            else:
+                add(window, "its step (the bin's middle)", r.paper, r.measure, 0, last, la[1], lb[1],
+                    _lowest_step_cell, ",.0f")
     note = (f"{figure}'s setting ({POLICY_LABELS[policy]}): {labels[0]} is {a.name} ({len(groups[a.name].indices)} "
             f"runs, {a.steps_done:,} steps), {labels[1]} {b.name} ({len(groups[b.name].indices)} runs, "
             f"{b.steps_done:,} steps). The posterior spread is the part of the curiosity that sampling the next "
             f"view's latent adds (its expectation), the rest is the memory's error against the posterior mean.")
+    if lows:
+        note += (f" The lowest bin: each run's lowest {BIN_STEPS:,}-step bin of curiosity after the first, over the "
+                 "steps both ran, and that bin's middle step.")
     if any(m == "batch_curiosity" for m, _ in metrics) and not all("batch_curiosity" in s.metrics for s in (a, b)):
         note += " The training batches' curiosity: —, a sweep made before it was recorded."
     return Table(cols, rows, values, note)
