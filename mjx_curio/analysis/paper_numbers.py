@@ -247,8 +247,8 @@ def readings_side_by_side(a: Sweep, b: Sweep, labels: tuple[str, str], figure: s
     """Two sweeps of one figure's setting that differ in one setting (e.g. the VAE's layers),
     beside the paper's curiosity levels for that figure: per level reading of `READINGS` that both
     sweeps reach, in the window where the paper's curve is lowest (its `lowest` reading's box)
-    where both reach it, and over the last 2,000 steps both ran, each sweep's curiosity, the posterior
-    spread within it and, where a sweep records it, the curiosity of its training batches
+    where both reach it, and over the last 2,000 steps both ran, each sweep's curiosity, the
+    posterior spread within it and, where a sweep records it, the curiosity of its training batches
     (`batch_curiosity`, the statistic the authors' code logs in its place): each run's mean over
     the window's 1,000-step bins; mean over the runs of the figure's policy [95 % CI], and b minus
     a (Welch: [95 % CI], p) where both have it. Where the paper reads the figure's lowest point,
