@@ -780,6 +780,13 @@ def test_a_side_experiment_keeps_its_own_key_and_claim_6b_reads_it_for_the_order
     assert r.verdict.startswith("holds"), r.verdict
     r = cl.claim_boltzmann_trembles(cl.assign_presets([main]))
     assert r.verdict.startswith("not testable: the sweep does not record the order"), r.verdict
+    # A side experiment of another algorithm (here z=mean; likewise the authors' VAE layers) is
+    # set beside the preset, never in its place, though its name comes first and it records the order.
+    other = fake_sweep("multi_agent.a_z_mean", 2, POLICIES, 1000, preset="multi_agent", z="mean")
+    got = cl.assign_presets([other, main, side])
+    assert list(got) == ["multi_agent", "multi_agent.a_z_mean", "multi_agent.order"]
+    assert cl.preset_and_sides(got, "multi_agent") == [main, side]
+    assert cl.claim_boltzmann_trembles(got).statistic.startswith("multi_agent.order: reversal rate")
     # A side experiment named after a preset whose settings it does not have is refused by name.
     single = fake_sweep("multi_agent.order", 1, POLICIES, 4)
     with pytest.raises(an.SweepError, match="multi_agent.order: named as a side experiment of multi_agent"):

@@ -105,8 +105,14 @@ def assign_presets(sweeps) -> dict[str, Sweep]:
 
 
 def preset_and_sides(presets: Mapping[str, Sweep], preset: str) -> list[Sweep]:
-    """The sweep serving `preset`, then its side experiments (`<preset>.<label>`), those given."""
-    return [s for key, s in presets.items() if key == preset or key.startswith(preset + ".")]
+    """The sweep serving `preset`, then those of its side experiments (`<preset>.<label>`) given
+    that learn as it does: a claim may read a metric the preset's sweep lacks from a side
+    experiment only where it is the same algorithm (not one with the authors' VAE layers or
+    `z=mean`, which stand beside the preset to compare, not in its place)."""
+    own = presets.get(preset)
+    return [s for key, s in presets.items()
+            if key == preset or (key.startswith(preset + ".")
+                                 and (own is None or s.learner_config() == own.learner_config()))]
 
 
 def _fits(s: Sweep, want: dict) -> bool:
