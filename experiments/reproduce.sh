@@ -126,6 +126,11 @@
 # 40,000 steps (1 h 18 min alone on the Intel Xeon @ 2.80GHz, 32-35 run-steps/s), not run by
 # this script:
 #     python -m mjx_curio.sweep preset=single_agent policies=eps seeds=4 steps=40000 checkpoint_every=1000 out=runs/paper/single_agent.batch_curiosity
+# And fig. 17's setting with the authors' VAE layers (two epsilon-greedy agents, the seeds of
+# multi_agent.spread, beside which the page sets it), 4 seeds x 40,000 steps (about 5 h 50 min of
+# stepping over 3 sessions on the Intel Xeon @ 2.80GHz, 8-9.8 run-steps/s alone), not run by this
+# script:
+#     python -m mjx_curio.sweep preset=multi_agent policies=eps seeds=4 steps=40000 vae_layers=authors checkpoint_every=1000 out=runs/paper/multi_agent.authors_vae
 #
 # The paper's full scale (8 seeds, 80,000 steps, every preset) is a GPU job: install the CUDA
 # extra (pip install -e '.[cuda]') and run
