@@ -146,6 +146,15 @@ def test_join_seed_parts_merges_each_experiments_parts_and_keeps_the_rest_apart(
     assert an.join_seed_parts([c, a])[0].name == "multi_agent.seeds-0-2+6-7"  # a gap is named, not bridged
     assert an.join_seed_parts([a, rerun])[0].name == "multi_agent.seeds-0-2+4"
     assert an.join_seed_parts([a]) == [a]
+    # A later part that records a metric added since joins the earlier ones, which lack it, and the
+    # merge keeps what every part records; a metric recorded as another array keeps it apart.
+    entry = {"dtype": "float32", "dims": ["runs", "windows"], "unit": "m"}
+    a.manifest["metrics"]["schema"] = {"x": entry}
+    b.manifest["metrics"]["schema"] = {"x": entry, "added": entry}
+    c.manifest["metrics"]["schema"] = {"x": {**entry, "dtype": "float16"}}
+    got = an.join_seed_parts([a, b, c])
+    assert [s.name for s in got] == ["multi_agent.seeds-0-5", "multi_agent.seeds-6-7"] and got[1] is c
+    assert got[0].parts == (a, b) and set(got[0].manifest["metrics"]["schema"]) == {"x"}
 
 
 def test_pieces_of_one_grid_merge_over_the_keys_they_may_differ_in():

@@ -552,15 +552,23 @@ def join_seed_parts(sweeps: Sequence[Sweep]) -> list[Sweep]:
     with the seeds it holds (`multi_agent.seeds-0-7`), where the first of them stood in `sweeps`.
     A sweep that repeats a run (policy, setting, seed) of parts with lower first seeds stays
     apart: it is a rerun, not more seeds; so does a side experiment (`side_experiment`), which
-    joins only its own seed parts. A merged sweep reads its checkpoints from its `parts`."""
+    joins only its own seed parts. A part made after a metric was added records it and the
+    earlier parts do not: it still joins them (the merge keeps the metrics all parts record), as
+    what a sweep records does not change its runs; a metric recorded as another array (dtype,
+    dims or unit) in two parts keeps them apart. A merged sweep reads its checkpoints from its
+    `parts`."""
     from mjx_curio.plan import result_values
 
     def settings(s: Sweep) -> str:
         values = {k: v for k, v in result_values(s.manifest).items() if k not in ("seeds", "first_seed")}
-        return json.dumps([values, _arrays(s), s.metrics_every, side_experiment(s.name)], sort_keys=True, default=str)
+        return json.dumps([values, s.metrics_every, side_experiment(s.name)], sort_keys=True, default=str)
 
     def runs(s: Sweep) -> set:
         return {(r.policy, r.setting, r.seed) for r in s.runs}
+
+    def same_arrays(s: Sweep, parts: list[int]) -> bool:
+        mine = _arrays(s)
+        return all(mine[k] == theirs[k] for j in parts for theirs in [_arrays(sweeps[j])] for k in mine.keys() & theirs.keys())
 
     # Parts join in order of their first seed (the fuller first where they tie), so that which of
     # two sweeps with a run in common stays apart does not depend on the order given.
@@ -570,7 +578,8 @@ def join_seed_parts(sweeps: Sequence[Sweep]) -> list[Sweep]:
     for i in order:
         key = settings(sweeps[i])
         home = next((parts for k, parts in experiments
-                     if k == key and not runs(sweeps[i]) & set().union(*(runs(sweeps[j]) for j in parts))), None)
+                     if k == key and same_arrays(sweeps[i], parts)
+                     and not runs(sweeps[i]) & set().union(*(runs(sweeps[j]) for j in parts))), None)
         if home is None:
             experiments.append((key, [i]))
         else:
