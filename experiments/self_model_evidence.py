@@ -14,11 +14,14 @@ mean of each action over the buffer. From the metrics, the sweep's own per-step 
 last third of the run (`analysis.step_tracking`) beside it.
 
 Writes docs/results/self_model_noise.json (one entry per sweep and step, replacing an earlier
-entry of the same sweep and step) and prints a Markdown table, one row per policy.
+entry of the same sweep and step) and prints a Markdown table, one row per policy, over the runs
+of every seed part of the experiment saved there (`multi_agent.per_step` and
+`multi_agent.per_step.seeds-3-5` as one).
 """
 
 from __future__ import annotations
 
+import json
 import pathlib
 import sys
 
@@ -56,10 +59,35 @@ def evidence(path: str) -> dict:
     sys.path.insert(0, str(pathlib.Path(__file__).resolve().parent))
     from evidence_cli import save_entry
 
+    saved = json.loads(OUT.read_text()) if OUT.exists() else []
+    # Pooled before anything is written, so that parts that repeat a run leave the file as it was.
+    pooled = experiment_entry([e for e in saved if (e["sweep"], e["step"]) != (entry["sweep"], step)] + [entry], entry)
     save_entry(OUT, entry, keys=("sweep", "step"), indent=2)
-    print(table(entry))
+    print(table(pooled))
     print(f"wrote {OUT}")
     return entry
+
+
+def experiment_entry(saved: list[dict], entry: dict) -> dict:
+    """`entry` with the runs of every saved entry of the same experiment (its seed parts: the
+    name less a `.seeds-...` suffix the same) at the same step and window, seeds in order, named
+    by the experiment and the seeds it holds (`multi_agent.per_step.seeds-0-5`); `entry` itself
+    where it is the only one. `saved` holds `entry` too. SweepError where two parts hold one run
+    (its name: policy, setting and seed)."""
+    from mjx_curio import analysis as an
+    from mjx_curio.analysis import SweepError
+
+    name = an.experiment_name(entry["sweep"])
+    parts = [e for e in saved if an.experiment_name(e["sweep"]) == name
+             and (e["step"], e["window"]) == (entry["step"], entry["window"])]
+    if len(parts) <= 1:
+        return entry
+    runs = sorted((r for e in parts for r in e["runs"]), key=lambda r: r["seed"])
+    ran = [r["run"] for r in runs]  # policy, setting and seed
+    if len(set(ran)) < len(ran):
+        raise SweepError(f"the saved parts of {name} at step {entry['step']:,} in {OUT} and this sweep repeat a run "
+                         "(policy, setting, seed): a rerun, not more seeds; remove its stale entry there")
+    return {**entry, "sweep": an.seeds_name(name, [r["seed"] for r in runs]), "runs": runs}
 
 
 def table(entry: dict) -> str:
@@ -94,7 +122,14 @@ def table(entry: dict) -> str:
     return "\n".join(lines)
 
 
+def main(argv: list[str]) -> int:
+    """Bad input (no such sweep, no checkpoints or replay buffers) is a one-line message and exit
+    status 2, before anything is written."""
+    sys.path.insert(0, str(pathlib.Path(__file__).resolve().parent))
+    from evidence_cli import one_sweep_main
+
+    return one_sweep_main("self_model_evidence.py", __doc__, evidence, argv)
+
+
 if __name__ == "__main__":
-    if len(sys.argv) != 2:
-        raise SystemExit(__doc__)
-    evidence(sys.argv[1])
+    sys.exit(main(sys.argv[1:]))

@@ -228,6 +228,33 @@ def test_authors_memory_evidence_on_the_tiny_sweeps(results, tiny_sweep, tiny_si
     assert results.authors_memory_block(tmp_path / "none.json").startswith("No sweep's replay buffers")
 
 
+def test_self_model_evidence_on_the_tiny_sweep(tiny_sweep, tmp_path, capsys):
+    """Every run's figures are `curiosity_noise`'s and `step_tracking`'s, the printed table pools the
+    saved seed parts of the sweep's experiment (and only those), and bad input writes nothing."""
+    module, entry, sweep = _evidence_on_tiny_sweep("self_model", tiny_sweep, tmp_path, capsys)
+    assert [r["run"] for r in entry["runs"]] == [r.name for r in sweep.runs] and entry["window"] == 20
+    tracked = an.step_tracking(sweep)
+    for i in (0, sweep.n_runs - 1):
+        cn, got = an.curiosity_noise(sweep, i), entry["runs"][i]
+        np.testing.assert_allclose(got["curiosity_mean"], cn.expected.mean(axis=0), rtol=1e-12)
+        np.testing.assert_allclose(got["spread_share"], cn.spread.mean(axis=0) / cn.expected.mean(axis=0), rtol=1e-12)
+        assert got["r_self_obtained_late"] == pytest.approx(np.tanh(tracked["self_late"][i]), rel=1e-12)
+    assert json.loads(module.OUT.read_text()) == [entry]
+    assert f"| eps | {sum(r.policy == 'eps' for r in sweep.runs)} |" in capsys.readouterr().out
+    # Seed parts of one experiment pool; another experiment, or another step, stays out.
+    part = {**entry, "sweep": "x.seeds-3-5",
+            "runs": [{**r, "seed": r["seed"] + 3, "run": r["run"] + "+3"} for r in entry["runs"]]}
+    saved = [{**entry, "sweep": "x"}, part, {**entry, "sweep": "y"}, {**part, "step": entry["step"] + 1}]
+    pooled = module.experiment_entry(saved, part)
+    seeds = sorted({r.seed for r in sweep.runs})
+    assert pooled["sweep"] == an.seeds_name("x", seeds + [s + 3 for s in seeds])
+    assert len(pooled["runs"]) == 2 * sweep.n_runs and [r["seed"] for r in pooled["runs"]] == sorted(
+        r["seed"] for r in pooled["runs"])
+    assert module.experiment_entry([entry], entry) is entry
+    with pytest.raises(an.SweepError, match="repeat a run"):
+        module.experiment_entry([{**entry, "sweep": "x"}, {**entry, "sweep": "x.seeds-3-5"}], entry | {"sweep": "x"})
+
+
 def test_reconstruction_evidence_policies_and_paired_test_on_planted_numbers(tiny_sweep):
     """Planted errors: run i's VAE on run j's views costs 100 * (i's group) + (j's group); the
     per-policy table must average exactly the pairs of other runs, and the paired test must be

@@ -60,7 +60,8 @@ action_values, curiosity_parts, self_model, temperatures and paper_numbers):
     sweeps    loading: `load`, `find_sweeps`, `load_sweeps`, `merge_sweeps` (one experiment's seeds
               from several sweeps), `join_seed_parts` (every such experiment of a list merged),
               `pick_single_multi`, `side_experiment` (a `<preset>.<label>` sweep, kept apart from
-              the preset's own); `Sweep`, `Run`, `Group`, `SweepError`; the
+              the preset's own), `experiment_name` and `seeds_name` (a seed part's name less its
+              seeds, and an experiment's with the seeds it holds); `Sweep`, `Run`, `Group`, `SweepError`; the
               configs a sweep ran with (`learner_config`, `run_config`, `run_specs`) rebuilt from
               its manifest
     stats     statistics: `t_quantile_975`, `mean_ci`, `mean_sd`, `moving_average`, `bin_windows`
@@ -272,6 +273,7 @@ from mjx_curio.analysis.sweeps import (
     SweepError,
     _quiet_orbax,  # video.py reads checkpoints with it
     drop_diverged,
+    experiment_name,
     find_sweeps,
     join_seed_parts,
     learner_config,
@@ -281,6 +283,7 @@ from mjx_curio.analysis.sweeps import (
     pick_single_multi,
     run_config,
     run_specs,
+    seeds_name,
     side_experiment,
 )
 from mjx_curio.analysis.tables import Table, headline_table
@@ -309,8 +312,8 @@ from mjx_curio.analysis.paper_numbers import (
 __all__ = [
     # sweeps
     "FORMAT", "POLICY_LABELS", "SETTINGS", "SWEEP_OUTPUTS", "Group", "Run", "Sweep", "SweepError", "drop_diverged",
-    "find_sweeps", "join_seed_parts", "learner_config", "load", "load_sweeps", "merge_sweeps", "pick_single_multi",
-    "run_config", "run_specs", "side_experiment",
+    "experiment_name", "find_sweeps", "join_seed_parts", "learner_config", "load", "load_sweeps", "merge_sweeps",
+    "pick_single_multi", "run_config", "run_specs", "seeds_name", "side_experiment",
     # stats
     "OBS_CLASSES", "action_totals", "agent_contacts", "bin_windows", "cells_visited", "cumulative_interactions",
     "interaction_frequency", "mean_ci", "mean_sd", "moving_average", "nan_ratio", "object_contacts",

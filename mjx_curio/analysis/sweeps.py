@@ -95,7 +95,7 @@ class Sweep:
 
     Attributes:
       path, name: the directory and its name (a merged sweep's: its first part's directory, and
-        `_seeds_name` of the seeds it holds, `multi_agent.seeds-0-7`; parts of a grid merged with
+        `seeds_name` of the seeds it holds, `multi_agent.seeds-0-7`; parts of a grid merged with
         `differ`: their names joined by " + ").
       manifest, progress: the parsed manifest.json and progress.json.
       runs: list of `Run`, in the order of the metrics' first axis.
@@ -504,12 +504,18 @@ def merge_sweeps(parts: Sequence[Sweep], differ: Sequence[str] = ()) -> Sweep:
     merged = Sweep(first.path, manifest, progress, steps, metrics)
     # Seeds of one experiment read as one sweep named by its seeds; pieces of a grid by their parts.
     merged.name = (" + ".join(s.name for s in parts) if differ
-                   else _seeds_name(parts[0].name, [r.seed for r in merged.runs]))
+                   else seeds_name(parts[0].name, [r.seed for r in merged.runs]))
     merged.parts = tuple(parts)
     return merged
 
 
-def _seeds_name(name: str, seeds: Sequence[int]) -> str:
+def experiment_name(name: str) -> str:
+    """A sweep's name less the `.seeds-...` suffix of a seed part: `multi_agent.order` for
+    `multi_agent.order.seeds-3-5`; any other name as it is."""
+    return _SEEDS_SUFFIX.sub("", name)
+
+
+def seeds_name(name: str, seeds: Sequence[int]) -> str:
     """`name` (less a `.seeds-...` suffix it has) with the seeds held: `multi_agent.seeds-0-7`;
     seeds with gaps name each run of consecutive ones, `multi_agent.seeds-0-2+5-7`, a lone seed
     by itself, `multi_agent.seeds-0-2+4`."""
@@ -520,7 +526,7 @@ def _seeds_name(name: str, seeds: Sequence[int]) -> str:
             spans[-1][1] = x
         else:
             spans.append([x, x])
-    return f"{_SEEDS_SUFFIX.sub('', name)}.seeds-" + "+".join(f"{a}-{b}" if b > a else f"{a}" for a, b in spans)
+    return f"{experiment_name(name)}.seeds-" + "+".join(f"{a}-{b}" if b > a else f"{a}" for a, b in spans)
 
 
 _SEEDS_SUFFIX = re.compile(r"[.]seeds-[0-9+-]+$")
@@ -533,7 +539,7 @@ def side_experiment(name: str) -> str | None:
     (`join_seed_parts`, `analysis.assign_presets`). None for any other name."""
     from mjx_curio.presets import load_presets
 
-    base = _SEEDS_SUFFIX.sub("", name)
+    base = experiment_name(name)
     preset, dot, label = base.partition(".")
     return base if dot and label and preset in load_presets() else None
 
@@ -568,7 +574,8 @@ def join_seed_parts(sweeps: Sequence[Sweep]) -> list[Sweep]:
 
     def same_arrays(s: Sweep, parts: list[int]) -> bool:
         mine = _arrays(s)
-        return all(mine[k] == theirs[k] for j in parts for theirs in [_arrays(sweeps[j])] for k in mine.keys() & theirs.keys())
+        return all(mine[k] == theirs[k]
+                   for j in parts for theirs in [_arrays(sweeps[j])] for k in mine.keys() & theirs.keys())
 
     # Parts join in order of their first seed (the fuller first where they tie), so that which of
     # two sweeps with a run in common stays apart does not depend on the order given.
