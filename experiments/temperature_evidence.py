@@ -72,9 +72,7 @@ def evidence(path: str) -> dict:
     from mjx_curio import analysis as an
 
     sweep = an.load(path)
-    values = [an.action_values(sweep, int(i)) for i in sweep.select(policy="boltzmann")]
-    if not values:
-        raise SystemExit(f"{path}: no Boltzmann runs")
+    values = [an.action_values(sweep, int(i)) for i in sweep.select(policy="boltzmann")]  # SweepError if none
     step = values[0].step
     entry = {"sweep": sweep.name, "step": step, "uniform_prob": 1 / len(sweep.actions),
              "runs": [run_figures(v) for v in values], "metrics": metrics_figures(sweep)}
@@ -128,7 +126,14 @@ def table(entry: dict) -> str:
     return "\n".join(lines)
 
 
+def main(argv: list[str]) -> int:
+    """Bad input (no such sweep, no Boltzmann runs, no checkpoints or replay buffers) is a one-line
+    message and exit status 2, before anything is written."""
+    sys.path.insert(0, str(pathlib.Path(__file__).resolve().parent))
+    from evidence_cli import one_sweep_main
+
+    return one_sweep_main("temperature_evidence.py", __doc__, evidence, argv)
+
+
 if __name__ == "__main__":
-    if len(sys.argv) != 2:
-        raise SystemExit(__doc__)
-    evidence(sys.argv[1])
+    sys.exit(main(sys.argv[1:]))

@@ -255,6 +255,33 @@ def test_self_model_evidence_on_the_tiny_sweep(tiny_sweep, tmp_path, capsys):
         module.experiment_entry([{**entry, "sweep": "x"}, {**entry, "sweep": "x.seeds-3-5"}], entry | {"sweep": "x"})
 
 
+def test_temperature_evidence_on_the_tiny_sweep(tiny_sweep, tiny_single_sweep, tmp_path, capsys):
+    """Every Boltzmann run's figures are NumPy's softmax of its self-models' predictions, one table
+    row per temperature, the figure written where FIGURES points; a sweep without Boltzmann runs,
+    like any bad input, writes nothing."""
+    module = _experiment("temperature_evidence")
+    module.OUT, module.FIGURES = tmp_path / "out" / "temperature.json", tmp_path / "figures"
+    module.FIGURES.mkdir()
+    assert module.main([str(tiny_single_sweep)]) == 2 and "temperature_evidence.py:" in capsys.readouterr().err
+    _refuses_bad_sweeps(module, "temperature_evidence.py", tiny_sweep, tmp_path, capsys)
+    entry, sweep = module.evidence(str(tiny_sweep)), an.load(tiny_sweep)
+    boltzmann = sweep.select(policy="boltzmann")
+    assert [r["run"] for r in entry["runs"]] == [sweep.runs[i].name for i in boltzmann]
+    for k in (0, len(boltzmann) - 1):
+        q, got = an.action_values(sweep, int(boltzmann[k])).q.astype(np.float64), entry["runs"][k]
+        x = q / got["temperature"]
+        p = np.exp(x - x.max(-1, keepdims=True))
+        p /= p.sum(-1, keepdims=True)
+        assert got["max_prob"] == pytest.approx(p.max(-1).mean(), rel=1e-6)
+        assert got["entropy_rel"] == pytest.approx((-(p * np.log(p)).sum(-1) / np.log(7)).mean(), rel=1e-6)
+        assert got["spread_median"] == pytest.approx(np.median(q.max(-1) - q.min(-1)), rel=1e-6)
+    temperatures = sorted({r["temperature"] for r in entry["runs"]})
+    out = capsys.readouterr().out
+    assert all(f"| {t:g} | {sum(r['temperature'] == t for r in entry['runs'])} |" in out for t in temperatures)
+    assert (module.FIGURES / f"{sweep.name}_greediness.png").stat().st_size > 0
+    assert json.loads(module.OUT.read_text()) == [entry]
+
+
 def test_reconstruction_evidence_policies_and_paired_test_on_planted_numbers(tiny_sweep):
     """Planted errors: run i's VAE on run j's views costs 100 * (i's group) + (j's group); the
     per-policy table must average exactly the pairs of other runs, and the paired test must be
