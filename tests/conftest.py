@@ -302,6 +302,34 @@ def _skipped(item) -> bool:
         m.args and m.args[0] is True for m in item.iter_markers("skipif"))
 
 
+@pytest.fixture(scope="session", autouse=True)
+def repository_left_as_found():
+    """No test writes into the repository: what git sees changed or added in the working tree
+    (with each such file's modification time) is the same after the session as before it, so
+    that a test cannot overwrite a committed result or leave a stray file (a script's output
+    path not redirected). Outside a git checkout there is nothing to compare."""
+    before = _working_tree_changes()
+    yield
+    after = _working_tree_changes()
+    if before is not None and after != before:
+        changed = sorted(k for k in after.keys() | before.keys() if after.get(k) != before.get(k))
+        pytest.fail("the tests wrote into the repository: " + ", ".join(changed), pytrace=False)
+
+
+def _working_tree_changes() -> dict | None:
+    """{path: modification time in ns (None where deleted)} of the files `git status` lists as
+    changed or untracked (ignored ones not), or None where this is no git checkout."""
+    root = pathlib.Path(__file__).resolve().parents[1]
+    if not (root / ".git").exists() or shutil.which("git") is None:
+        return None
+    out = subprocess.run(["git", "status", "--porcelain", "--untracked-files=all", "-z"], cwd=root,
+                         capture_output=True, text=True)
+    if out.returncode != 0:
+        return None
+    paths = [entry[3:] for entry in out.stdout.split("\0") if len(entry) > 3]
+    return {p: (root / p).stat().st_mtime_ns if (root / p).exists() else None for p in paths}
+
+
 def pytest_sessionfinish(session, exitstatus):
     with _background_lock:
         _stopping.set()
