@@ -113,29 +113,35 @@ def curves(stored_path: str, reencode_path: str) -> dict:
     out = DOCS / "figures" / "latents_curves.png"
     fig.savefig(out, dpi=90)
     a, b = np.array(result["stored"]["last_quarter_curiosity"]), np.array(result["reencode"]["last_quarter_curiosity"])
-    t, p = _welch(a, b)
-    result["welch_last_quarter"] = {"t": t, "p": p, "stored_mean": float(a.mean()), "reencode_mean": float(b.mean())}
+    w = an.welch_t(a, b)
+    result["welch_last_quarter"] = {"t": w["t"], "p": w["p"], "stored_mean": float(a.mean()),
+                                    "reencode_mean": float(b.mean())}
     (DOCS / "latents").mkdir(parents=True, exist_ok=True)
     (DOCS / "latents" / "curves.json").write_text(json.dumps(result, indent=2) + "\n")
     print(json.dumps(result["welch_last_quarter"], indent=1))
     return result
 
 
-def _welch(a: np.ndarray, b: np.ndarray) -> tuple[float, float]:
-    from math import erf, sqrt
+COMMANDS = {"staleness": (1, "SWEEP"), "curves": (2, "STORED REENCODE")}
 
-    va, vb = a.var(ddof=1) / len(a), b.var(ddof=1) / len(b)
-    t = float((a.mean() - b.mean()) / np.sqrt(va + vb))
-    df = (va + vb) ** 2 / (va ** 2 / (len(a) - 1) + vb ** 2 / (len(b) - 1))
+
+def main(argv: list[str]) -> int:
+    """`staleness SWEEP` or `curves STORED REENCODE`; anything else, or a sweep that cannot be read
+    (SweepError), is a message and exit status 2, before anything is written."""
+    from mjx_curio.analysis import SweepError
+
+    what, args = (argv[0], argv[1:]) if argv else (None, [])
+    if what not in COMMANDS or len(args) != COMMANDS[what][0]:
+        usage = "\n".join(f"    python experiments/latents_evidence.py {k} {v}" for k, (_, v) in COMMANDS.items())
+        print(f"latents_evidence.py: want one of\n{usage}", file=sys.stderr)
+        return 2
     try:
-        from scipy import stats
-
-        p = float(2 * stats.t.sf(abs(t), df))
-    except ImportError:  # normal approximation
-        p = float(2 * (1 - 0.5 * (1 + erf(abs(t) / sqrt(2)))))
-    return t, p
+        {"staleness": staleness, "curves": curves}[what](*args)
+    except SweepError as err:
+        print(f"latents_evidence.py: {err}", file=sys.stderr)
+        return 2
+    return 0
 
 
 if __name__ == "__main__":
-    what, *args = sys.argv[1:]
-    {"staleness": staleness, "curves": curves}[what](*args)
+    sys.exit(main(sys.argv[1:]))

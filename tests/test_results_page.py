@@ -282,6 +282,17 @@ def test_temperature_evidence_on_the_tiny_sweep(tiny_sweep, tiny_single_sweep, t
     assert json.loads(module.OUT.read_text()) == [entry]
 
 
+def test_latents_evidence_refuses_bad_input(tmp_path, capsys):
+    """No command, an unknown one, the wrong number of sweeps or no such sweep: a message and
+    status 2, with nothing written."""
+    module = _experiment("latents_evidence")
+    module.DOCS = tmp_path / "docs"
+    for argv in ([], ["bogus", "x"], ["curves", "one"], ["staleness", "a", "b"]):
+        assert module.main(argv) == 2 and "latents_evidence.py curves STORED REENCODE" in capsys.readouterr().err
+    assert module.main(["staleness", str(tmp_path / "nowhere")]) == 2
+    assert "does not exist" in capsys.readouterr().err and not module.DOCS.exists()
+
+
 def test_reconstruction_evidence_policies_and_paired_test_on_planted_numbers(tiny_sweep):
     """Planted errors: run i's VAE on run j's views costs 100 * (i's group) + (j's group); the
     per-policy table must average exactly the pairs of other runs, and the paired test must be
