@@ -146,6 +146,9 @@ def test_join_seed_parts_merges_each_experiments_parts_and_keeps_the_rest_apart(
     assert an.join_seed_parts([c, a])[0].name == "multi_agent.seeds-0-2+6-7"  # a gap is named, not bridged
     assert an.join_seed_parts([a, rerun])[0].name == "multi_agent.seeds-0-2+4"
     assert an.join_seed_parts([a]) == [a]
+    assert an.experiment_name("multi_agent.order.seeds-3-5") == "multi_agent.order" == an.experiment_name(
+        "multi_agent.order") and an.experiment_name("multi_agent.seeds-0-2+4") == "multi_agent"
+    assert an.seeds_name("multi_agent.order.seeds-3-5", [5, 0, 1, 2, 4]) == "multi_agent.order.seeds-0-2+4-5"
     # A later part that records a metric added since joins the earlier ones, which lack it, and the
     # merge keeps what every part records; a metric recorded as another array keeps it apart.
     entry = {"dtype": "float32", "dims": ["runs", "windows"], "unit": "m"}

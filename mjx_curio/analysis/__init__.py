@@ -61,9 +61,9 @@ action_values, curiosity_parts, self_model, temperatures and paper_numbers):
               from several sweeps), `join_seed_parts` (every such experiment of a list merged),
               `pick_single_multi`, `side_experiment` (a `<preset>.<label>` sweep, kept apart from
               the preset's own), `experiment_name` and `seeds_name` (a seed part's name less its
-              seeds, and an experiment's with the seeds it holds); `Sweep`, `Run`, `Group`, `SweepError`; the
-              configs a sweep ran with (`learner_config`, `run_config`, `run_specs`) rebuilt from
-              its manifest
+              seeds, and an experiment's with the seeds it holds); `Sweep`, `Run`, `Group`,
+              `SweepError`; the configs a sweep ran with (`learner_config`, `run_config`,
+              `run_specs`) rebuilt from its manifest
     stats     statistics: `t_quantile_975`, `mean_ci`, `mean_sd`, `moving_average`, `bin_windows`
               and the numbers the figures draw (`per_agent_vae_loss`, `object_contacts`,
               `agent_contacts`, `cells_visited`, `cumulative_interactions`, `interaction_frequency`,
