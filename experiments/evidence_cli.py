@@ -1,5 +1,6 @@
 """What the evidence scripts share: their command line, `python experiments/<script>.py <sweep>`
-(`one_sweep_main`), and the JSON list of entries each keeps under docs/results/ (`save_entry`).
+(`one_sweep_main`), the JSON list of entries each keeps under docs/results/ (`save_entry`), and
+the seed parts of one experiment read as one entry (`pool_seed_parts`, `pooled_entries`).
 
 Bad input (not one argument, no such sweep, no checkpoints or replay buffers) is a one-line
 message and exit status 2, before anything is written.
@@ -40,3 +41,40 @@ def save_entry(path: pathlib.Path, entry: dict, keys: tuple[str, ...] = ("sweep"
     saved = [e for e in saved if key(e) != key(entry)] + [entry]
     path.parent.mkdir(parents=True, exist_ok=True)
     path.write_text(json.dumps(sorted(saved, key=key), indent=indent) + "\n")
+
+
+def pool_seed_parts(saved: list[dict], entry: dict, same: tuple[str, ...], source: pathlib.Path) -> dict:
+    """`entry` with the runs of every saved entry of the same experiment (its seed parts: the
+    name less a `.seeds-...` suffix the same) and the same values of `same` (the step it was
+    measured at, say), seeds in order, named by the experiment and the seeds it holds
+    (`multi_agent.per_step.seeds-0-5`); `entry` itself where it is the only one. `saved` holds
+    `entry` too. SweepError where two parts hold one run (its name: policy, setting and seed),
+    naming `source`, the file they were saved in."""
+    from mjx_curio import analysis as an
+    from mjx_curio.analysis import SweepError
+
+    name = an.experiment_name(entry["sweep"])
+    parts = [e for e in saved if an.experiment_name(e["sweep"]) == name and all(e[k] == entry[k] for k in same)]
+    if len(parts) <= 1:
+        return entry
+    runs = sorted((r for e in parts for r in e["runs"]), key=lambda r: r["seed"])
+    ran = [r["run"] for r in runs]  # policy, setting and seed
+    if len(set(ran)) < len(ran):
+        where = ", ".join(f"{k} {entry[k]:,}" if isinstance(entry[k], int) else f"{k} {entry[k]}" for k in same)
+        raise SweepError(f"the saved parts of {name} ({where}) in {source} repeat a run (policy, setting, seed): "
+                         "a rerun, not more seeds; remove its stale entry there")
+    return {**entry, "sweep": an.seeds_name(name, [r["seed"] for r in runs]), "runs": runs}
+
+
+def pooled_entries(saved: list[dict], same: tuple[str, ...], source: pathlib.Path) -> list[dict]:
+    """The saved entries with each experiment's seed parts at the same values of `same` pooled
+    into one (`pool_seed_parts`), in the order of their first part."""
+    from mjx_curio import analysis as an
+
+    seen, pooled = set(), []
+    for e in saved:
+        key = (an.experiment_name(e["sweep"]),) + tuple(e[k] for k in same)
+        if key not in seen:
+            seen.add(key)
+            pooled.append(pool_seed_parts(saved, e, same, source))
+    return pooled

@@ -59,6 +59,8 @@ WALLS_CSV = ROOT / "docs" / "results" / "walls.csv"
 RECONSTRUCTIONS = ROOT / "docs" / "results" / "reconstructions.json"  # reconstruction_evidence.py writes it
 FULL_LENGTH = ROOT / "docs" / "results" / "full_length.json"  # full_length_evidence.py writes it
 POSTERIOR_DIMS = ROOT / "docs" / "results" / "posterior_dims.json"  # spread_evidence.py writes it
+# Seed parts of one experiment read as one where their views and counting are the same.
+POSTERIOR_DIMS_POOLED_BY = ("replay_step", "every", "near_prior", "latent")
 HISTORY = ROOT / "docs" / "results" / "history.json"  # history_evidence.py writes it
 AUTHORS_MEMORY = ROOT / "docs" / "results" / "authors_memory.json"  # authors_memory_evidence.py writes it
 SNAPSHOT_FILES = ("manifest.json", "progress.json")  # plus metrics/*.npy
@@ -208,8 +210,8 @@ def curiosity_parts_block(presets: dict, dims: pathlib.Path = POSTERIOR_DIMS) ->
     ran the same policy (`analysis.agents_parts_table`), and claims 10 and 11 wherever two policies
     ran with the same agents (`analysis.policies_parts_table`), and claims 9 and 12, watching and
     touching (`analysis.situation_parts_table`); then, from posterior_dims.json, each
-    sweep's spread and latent dimensions near the prior checkpoint by checkpoint
-    (`posterior_dims_table`)."""
+    experiment's spread and latent dimensions near the prior checkpoint by checkpoint
+    (`posterior_dims_table`), its seed parts measured on buffers of the same step as one."""
     from mjx_curio import analysis as an
 
     table = an.curiosity_parts_table(presets)
@@ -219,14 +221,19 @@ def curiosity_parts_block(presets: dict, dims: pathlib.Path = POSTERIOR_DIMS) ->
         if table.rows:
             parts.append(table.to_markdown())
     if dims.exists():
-        parts += [posterior_dims_table(e) for e in json.loads(dims.read_text())]
+        sys.path.insert(0, str(pathlib.Path(__file__).resolve().parent))
+        from evidence_cli import pooled_entries
+
+        saved = json.loads(dims.read_text())
+        parts += [posterior_dims_table(e) for e in pooled_entries(saved, POSTERIOR_DIMS_POOLED_BY, source=dims)]
     return "\n".join(parts)
 
 
 def posterior_dims_table(entry: dict) -> str:
     """Markdown: per group and checkpoint, the mean over its runs (range over runs) of the spread,
-    the median dimension's variance and the dimensions near the prior."""
-    checkpoints = list(entry["runs"][0]["by_checkpoint"])
+    the median dimension's variance and the dimensions near the prior, at the checkpoints every
+    run kept (seed parts that ran apart may have kept others too)."""
+    checkpoints = [k for k in entry["runs"][0]["by_checkpoint"] if all(k in r["by_checkpoint"] for r in entry["runs"])]
     lines = [f"`{entry['sweep']}`: each checkpoint's VAE on every {entry['every']}th view of the replay buffer kept "
              f"at step {entry['replay_step']:,}; per checkpoint, the posterior spread (mean over views and the "
              f"{entry['latent']} dimensions of σ²), the median dimension's σ² (mean over views), and the dimensions "

@@ -57,37 +57,16 @@ def evidence(path: str) -> dict:
         r["r_actions_obtained_late"] = float(np.tanh(tracked["base_late"][i])) if tracked is not None else None
     entry = {"sweep": sweep.name, "step": step, "window": WINDOW, "runs": runs}
     sys.path.insert(0, str(pathlib.Path(__file__).resolve().parent))
-    from evidence_cli import save_entry
+    from evidence_cli import pool_seed_parts, save_entry
 
     saved = json.loads(OUT.read_text()) if OUT.exists() else []
     # Pooled before anything is written, so that parts that repeat a run leave the file as it was.
-    pooled = experiment_entry([e for e in saved if (e["sweep"], e["step"]) != (entry["sweep"], step)] + [entry], entry)
+    pooled = pool_seed_parts([e for e in saved if (e["sweep"], e["step"]) != (entry["sweep"], step)] + [entry],
+                             entry, same=("step", "window"), source=OUT)
     save_entry(OUT, entry, keys=("sweep", "step"), indent=2)
     print(table(pooled))
     print(f"wrote {OUT}")
     return entry
-
-
-def experiment_entry(saved: list[dict], entry: dict) -> dict:
-    """`entry` with the runs of every saved entry of the same experiment (its seed parts: the
-    name less a `.seeds-...` suffix the same) at the same step and window, seeds in order, named
-    by the experiment and the seeds it holds (`multi_agent.per_step.seeds-0-5`); `entry` itself
-    where it is the only one. `saved` holds `entry` too. SweepError where two parts hold one run
-    (its name: policy, setting and seed)."""
-    from mjx_curio import analysis as an
-    from mjx_curio.analysis import SweepError
-
-    name = an.experiment_name(entry["sweep"])
-    parts = [e for e in saved if an.experiment_name(e["sweep"]) == name
-             and (e["step"], e["window"]) == (entry["step"], entry["window"])]
-    if len(parts) <= 1:
-        return entry
-    runs = sorted((r for e in parts for r in e["runs"]), key=lambda r: r["seed"])
-    ran = [r["run"] for r in runs]  # policy, setting and seed
-    if len(set(ran)) < len(ran):
-        raise SweepError(f"the saved parts of {name} at step {entry['step']:,} in {OUT} and this sweep repeat a run "
-                         "(policy, setting, seed): a rerun, not more seeds; remove its stale entry there")
-    return {**entry, "sweep": an.seeds_name(name, [r["seed"] for r in runs]), "runs": runs}
 
 
 def table(entry: dict) -> str:

@@ -14,11 +14,14 @@ noise.
 
 Writes docs/results/posterior_dims.json (one entry per sweep, replacing an earlier entry of the
 same sweep) and prints the entry as `results.py page` puts it in docs/results.md, under claim 1's
-parts (a Markdown table, one row per group).
+parts (a Markdown table, one row per group): with the runs of every seed part of the experiment
+saved there, measured on buffers of the same step (`multi_agent.per_step` and
+`multi_agent.per_step.seeds-3-5` as one).
 """
 
 from __future__ import annotations
 
+import json
 import pathlib
 import sys
 
@@ -49,10 +52,14 @@ def evidence(path: str) -> dict:
              "every": EVERY, "near_prior": NEAR_PRIOR, "latent": sweep.learner_config().latent, "runs": runs}
     sys.path.insert(0, str(pathlib.Path(__file__).resolve().parent))
     import results  # the page's own table of an entry
-    from evidence_cli import save_entry
+    from evidence_cli import pool_seed_parts, save_entry
 
+    saved = json.loads(OUT.read_text()) if OUT.exists() else []
+    # Pooled before anything is written, so that parts that repeat a run leave the file as it was.
+    pooled = pool_seed_parts([e for e in saved if e["sweep"] != entry["sweep"]] + [entry], entry,
+                             same=results.POSTERIOR_DIMS_POOLED_BY, source=OUT)
     save_entry(OUT, entry)
-    print(results.posterior_dims_table(entry))
+    print(results.posterior_dims_table(pooled))
     print(f"wrote {OUT}")
     return entry
 

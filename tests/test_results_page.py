@@ -168,6 +168,40 @@ def test_spread_evidence_on_the_tiny_sweep(results, tiny_sweep, tmp_path, capsys
     block = results.curiosity_parts_block({}, dims=module.OUT)
     rows = [r for r in block.splitlines() if r.startswith("| ") and not r.startswith("| group")]
     assert len(rows) == len(sweep.groups()) and block.startswith("No sweep that records")
+    # A later seed part is one table with the first, over the checkpoints both kept.
+    steps = list(entry["runs"][0]["by_checkpoint"])
+    later = {**entry, "sweep": entry["sweep"] + ".seeds-10-99",
+             "runs": [{**r, "run": r["run"] + "+10", "seed": r["seed"] + 10,
+                       "by_checkpoint": {k: v for k, v in r["by_checkpoint"].items() if k != steps[0]}}
+                      for r in entry["runs"]]}
+    module.OUT.write_text(json.dumps([entry, later]))
+    block = results.curiosity_parts_block({}, dims=module.OUT)
+    assert block.count("each checkpoint's VAE") == 1 and f"step {int(steps[0]):,} |" not in block
+    rows = [r for r in block.splitlines() if r.startswith("| ") and not r.startswith("| group")]
+    assert [int(r.split(" | ")[1]) for r in rows] == [2 * sum(x.group_label == g for x in sweep.runs)
+                                                      for g in dict.fromkeys(x.group_label for x in sweep.runs)]
+
+
+def test_seed_parts_of_an_experiment_pool():
+    """Entries of one experiment's seed parts at the same values of `same` become one, runs in seed
+    order, named by the seeds held; another experiment, or another step, stays apart; parts that
+    hold one run twice are refused, naming the file."""
+    module = _experiment("evidence_cli")
+
+    def part(sweep, seeds, step=100):
+        return {"sweep": sweep, "step": step, "runs": [{"run": f"eps_s{k}", "seed": k} for k in seeds]}
+
+    first, later = part("x", [2, 0, 1]), part("x.seeds-3-5", [5, 3, 4])
+    saved = [first, later, part("y", [0, 1, 2]), part("x.seeds-6-7", [6, 7], step=200)]
+    pooled = module.pool_seed_parts(saved, later, same=("step",), source=pathlib.Path("f.json"))
+    assert pooled["sweep"] == "x.seeds-0-5" and pooled["step"] == 100
+    assert [r["seed"] for r in pooled["runs"]] == [0, 1, 2, 3, 4, 5]
+    assert module.pool_seed_parts([first], first, same=("step",), source=pathlib.Path("f.json")) is first
+    assert [e["sweep"] for e in module.pooled_entries(saved, ("step",), source=pathlib.Path("f.json"))] == [
+        "x.seeds-0-5", "y", "x.seeds-6-7"]
+    with pytest.raises(an.SweepError, match=r"f\.json.*repeat a run"):
+        module.pool_seed_parts([first, part("x.seeds-2-4", [2, 3, 4])], first, same=("step",),
+                               source=pathlib.Path("f.json"))
 
 
 def test_evidence_entries_are_replaced_by_key_and_kept_sorted(tmp_path):
@@ -241,18 +275,13 @@ def test_self_model_evidence_on_the_tiny_sweep(tiny_sweep, tmp_path, capsys):
         assert got["r_self_obtained_late"] == pytest.approx(np.tanh(tracked["self_late"][i]), rel=1e-12)
     assert json.loads(module.OUT.read_text()) == [entry]
     assert f"| eps | {sum(r.policy == 'eps' for r in sweep.runs)} |" in capsys.readouterr().out
-    # Seed parts of one experiment pool; another experiment, or another step, stays out.
-    part = {**entry, "sweep": "x.seeds-3-5",
-            "runs": [{**r, "seed": r["seed"] + 3, "run": r["run"] + "+3"} for r in entry["runs"]]}
-    saved = [{**entry, "sweep": "x"}, part, {**entry, "sweep": "y"}, {**part, "step": entry["step"] + 1}]
-    pooled = module.experiment_entry(saved, part)
-    seeds = sorted({r.seed for r in sweep.runs})
-    assert pooled["sweep"] == an.seeds_name("x", seeds + [s + 3 for s in seeds])
-    assert len(pooled["runs"]) == 2 * sweep.n_runs and [r["seed"] for r in pooled["runs"]] == sorted(
-        r["seed"] for r in pooled["runs"])
-    assert module.experiment_entry([entry], entry) is entry
+    # The printed table pooled the saved seed parts (`test_seed_parts_of_an_experiment_pool`); a
+    # part that repeats a run is refused before the file is touched.
+    module.OUT.write_text(json.dumps([{**entry, "sweep": sweep.name + ".seeds-0-99"}]))
+    before = module.OUT.read_text()
     with pytest.raises(an.SweepError, match="repeat a run"):
-        module.experiment_entry([{**entry, "sweep": "x"}, {**entry, "sweep": "x.seeds-3-5"}], entry | {"sweep": "x"})
+        module.evidence(str(tiny_sweep))
+    assert module.OUT.read_text() == before
 
 
 def test_temperature_evidence_on_the_tiny_sweep(tiny_sweep, tiny_single_sweep, tmp_path, capsys):
