@@ -65,19 +65,22 @@
 # This script does not run it: a multi_agent sweep made now records the order itself, and claim
 # 6b reads that first. Such a sweep also records the window moments with which claim 8 correlates
 # the self-model's predictions with the curiosity obtained step by step; the committed ones do not,
-# so claim 8 reads a second side experiment, 3 seeds x 20,000 steps (about 2 h 30 min alone on the
-# AMD EPYC above), which this script does not run either:
+# so claim 8 reads a second side experiment, 6 seeds x 20,000 steps in two sweeps of 3 (each about
+# 2 h 30 min alone: on the AMD EPYC above, and at 19.8 run-steps/s on a 2-core Intel Xeon @ 2.80GHz,
+# lscpu family 6 model 106), which this script does not run either:
 #     python -m mjx_curio.sweep preset=multi_agent seeds=3 steps=20000 checkpoint_every=1000 out=runs/paper/multi_agent.per_step
+#     python -m mjx_curio.sweep preset=multi_agent seeds=3 first_seed=3 steps=20000 checkpoint_every=1000 out=runs/paper/multi_agent.per_step.seeds-3-5
 #     python experiments/self_model_evidence.py runs/paper/multi_agent.per_step   # about 6 min beside a running sweep
-# (the second: how much of each step's curiosity is sampling noise that no self-model can foresee,
-# docs/results/self_model_noise.json, quoted under claim 8).
+#     python experiments/self_model_evidence.py runs/paper/multi_agent.per_step.seeds-3-5   # its table pools both
+# (the evidence: how much of each step's curiosity is sampling noise that no self-model can foresee,
+# docs/results/self_model_noise.json, quoted under claim 8; spread_evidence.py below reads both too).
 # Claim 1's fall and rise are taken apart into the world model's error and the posterior's spread
 # on a third side experiment, one agent under epsilon-greedy (fig. 8's setting), which records the
 # spread (every sweep made now does; the committed presets ran before), 4 seeds x 40,000 steps
 # (1 h 44 min on the AMD EPYC above, 13 min of it paused; 32-36 run-steps/s alone), not run by
 # this script:
 #     python -m mjx_curio.sweep preset=single_agent policies=eps seeds=4 steps=40000 checkpoint_every=1000 out=runs/paper/single_agent.spread
-#     python experiments/spread_evidence.py runs/paper/single_agent.spread   # and on multi_agent.per_step
+#     python experiments/spread_evidence.py runs/paper/single_agent.spread   # and on both parts of multi_agent.per_step
 # (the second: each latent dimension's posterior variance at every kept checkpoint,
 # docs/results/posterior_dims.json, shown under claim 1's parts).
 # The same for two agents under epsilon-greedy (fig. 17's setting), 4 seeds x 40,000 steps (about 30
