@@ -1,6 +1,7 @@
 """What the evidence scripts share: their command line, `python experiments/<script>.py <sweep>`
 (`one_sweep_main`), the JSON list of entries each keeps under docs/results/ (`save_entry`), and
-the seed parts of one experiment read as one entry (`pool_seed_parts`, `pooled_entries`).
+the seed parts of one experiment read as one entry (`pool_seed_parts`, `save_part`,
+`pooled_entries`).
 
 Bad input (not one argument, no such sweep, no checkpoints or replay buffers) is a one-line
 message and exit status 2, before anything is written.
@@ -64,6 +65,17 @@ def pool_seed_parts(saved: list[dict], entry: dict, same: tuple[str, ...], sourc
         raise SweepError(f"the saved parts of {name} ({where}) in {source} repeat a run (policy, setting, seed): "
                          "a rerun, not more seeds; remove its stale entry there")
     return {**entry, "sweep": an.seeds_name(name, [r["seed"] for r in runs]), "runs": runs}
+
+
+def save_part(path: pathlib.Path, entry: dict, keys: tuple[str, ...], same: tuple[str, ...], indent: int = 1) -> dict:
+    """`save_entry`, and `entry` pooled with the seed parts of its experiment saved at `path`
+    (`pool_seed_parts`), which it returns. Pooled first: parts that repeat a run are a SweepError
+    that leaves the file as it was."""
+    saved = json.loads(path.read_text()) if path.exists() else []
+    key = tuple(entry[k] for k in keys)
+    pooled = pool_seed_parts([e for e in saved if tuple(e[k] for k in keys) != key] + [entry], entry, same, path)
+    save_entry(path, entry, keys=keys, indent=indent)
+    return pooled
 
 
 def pooled_entries(saved: list[dict], same: tuple[str, ...], source: pathlib.Path) -> list[dict]:

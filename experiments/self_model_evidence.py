@@ -21,7 +21,6 @@ of every seed part of the experiment saved there (`multi_agent.per_step` and
 
 from __future__ import annotations
 
-import json
 import pathlib
 import sys
 
@@ -57,14 +56,9 @@ def evidence(path: str) -> dict:
         r["r_actions_obtained_late"] = float(np.tanh(tracked["base_late"][i])) if tracked is not None else None
     entry = {"sweep": sweep.name, "step": step, "window": WINDOW, "runs": runs}
     sys.path.insert(0, str(pathlib.Path(__file__).resolve().parent))
-    from evidence_cli import pool_seed_parts, save_entry
+    from evidence_cli import save_part
 
-    saved = json.loads(OUT.read_text()) if OUT.exists() else []
-    # Pooled before anything is written, so that parts that repeat a run leave the file as it was.
-    pooled = pool_seed_parts([e for e in saved if (e["sweep"], e["step"]) != (entry["sweep"], step)] + [entry],
-                             entry, same=("step", "window"), source=OUT)
-    save_entry(OUT, entry, keys=("sweep", "step"), indent=2)
-    print(table(pooled))
+    print(table(save_part(OUT, entry, keys=("sweep", "step"), same=("step", "window"), indent=2)))
     print(f"wrote {OUT}")
     return entry
 

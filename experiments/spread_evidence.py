@@ -21,7 +21,6 @@ saved there, measured on buffers of the same step (`multi_agent.per_step` and
 
 from __future__ import annotations
 
-import json
 import pathlib
 import sys
 
@@ -52,14 +51,9 @@ def evidence(path: str) -> dict:
              "every": EVERY, "near_prior": NEAR_PRIOR, "latent": sweep.learner_config().latent, "runs": runs}
     sys.path.insert(0, str(pathlib.Path(__file__).resolve().parent))
     import results  # the page's own table of an entry
-    from evidence_cli import pool_seed_parts, save_entry
+    from evidence_cli import save_part
 
-    saved = json.loads(OUT.read_text()) if OUT.exists() else []
-    # Pooled before anything is written, so that parts that repeat a run leave the file as it was.
-    pooled = pool_seed_parts([e for e in saved if e["sweep"] != entry["sweep"]] + [entry], entry,
-                             same=results.POSTERIOR_DIMS_POOLED_BY, source=OUT)
-    save_entry(OUT, entry)
-    print(results.posterior_dims_table(pooled))
+    print(results.posterior_dims_table(save_part(OUT, entry, keys=("sweep",), same=results.POSTERIOR_DIMS_POOLED_BY)))
     print(f"wrote {OUT}")
     return entry
 

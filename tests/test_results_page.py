@@ -182,10 +182,11 @@ def test_spread_evidence_on_the_tiny_sweep(results, tiny_sweep, tmp_path, capsys
                                                       for g in dict.fromkeys(x.group_label for x in sweep.runs)]
 
 
-def test_seed_parts_of_an_experiment_pool():
+def test_seed_parts_of_an_experiment_pool(tmp_path):
     """Entries of one experiment's seed parts at the same values of `same` become one, runs in seed
     order, named by the seeds held; another experiment, or another step, stays apart; parts that
-    hold one run twice are refused, naming the file."""
+    hold one run twice are refused, naming the file, and a part saved among them then leaves the
+    file as it was."""
     module = _experiment("evidence_cli")
 
     def part(sweep, seeds, step=100):
@@ -202,6 +203,14 @@ def test_seed_parts_of_an_experiment_pool():
     with pytest.raises(an.SweepError, match=r"f\.json.*repeat a run"):
         module.pool_seed_parts([first, part("x.seeds-2-4", [2, 3, 4])], first, same=("step",),
                                source=pathlib.Path("f.json"))
+    path = tmp_path / "entries.json"
+    assert module.save_part(path, first, keys=("sweep", "step"), same=("step",)) == first
+    assert module.save_part(path, later, keys=("sweep", "step"), same=("step",))["sweep"] == "x.seeds-0-5"
+    assert module.save_part(path, later, keys=("sweep", "step"), same=("step",))["sweep"] == "x.seeds-0-5"  # again
+    before = path.read_text()
+    with pytest.raises(an.SweepError, match="repeat a run"):
+        module.save_part(path, part("x.seeds-2-4", [2, 3, 4]), keys=("sweep", "step"), same=("step",))
+    assert path.read_text() == before and [e["sweep"] for e in json.loads(before)] == ["x", "x.seeds-3-5"]
 
 
 def test_evidence_entries_are_replaced_by_key_and_kept_sorted(tmp_path):
