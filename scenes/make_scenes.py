@@ -27,8 +27,9 @@ def agent_body(name: str, xy, rgba: str) -> str:
     # Planar joints (x, y, yaw) at the cube's centre, 0.2 above the floor: the
     # cube never touches the floor, so no floor contacts are solved for agents.
     # Slide damping 20 N s/m: 50 N pushes to 2.5 m/s, which the 2 m/s cap cuts,
-    # and a released cube stops within about half a second, as the paper's
-    # cubes did on their floor.
+    # and a released cube slows to a fifth of its speed in 0.5 s and to 4 % in
+    # 1 s (time constant 6 kg / 20 N s/m = 0.3 s), coasting 0.6 m from 2 m/s:
+    # it comes to rest, as the paper's cubes did on their floor.
     return f"""    <body name="{name}" pos="{xy[0]} {xy[1]} 0.2">
       <joint name="{name}_x" type="slide" axis="1 0 0" damping="20"/>
       <joint name="{name}_y" type="slide" axis="0 1 0" damping="20"/>
