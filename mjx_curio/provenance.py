@@ -90,13 +90,27 @@ def cpu_name() -> str:
     return platform.processor()
 
 
-def git() -> dict:
-    here = pathlib.Path(__file__).resolve().parent
+def git(paths=None) -> dict:
+    """The commit of the checkout this package runs from, and whether what sets a run's results
+    differs from it: the package's code and the scenes it loads (the arena's masses, damping,
+    friction, timestep and textures live in their XML, outside the package's directory in a
+    checkout). paths: the directories to look at, the first inside the checkout (default those
+    two); any outside the checkout (an installed copy) are left out."""
+    if paths is None:
+        from mjx_curio.arena import SCENES
+
+        paths = [pathlib.Path(__file__).resolve().parent, SCENES]
+    paths = [pathlib.Path(x).resolve() for x in paths]
+
+    def run(*args):
+        return subprocess.run(["git", "-C", str(paths[0]), *args], capture_output=True, text=True, timeout=10)
+
     try:
-        commit = subprocess.run(["git", "-C", str(here), "rev-parse", "HEAD"], capture_output=True, text=True, timeout=10)
-        dirty = subprocess.run(["git", "-C", str(here), "status", "--porcelain", "--", "."], capture_output=True,
-                               text=True, timeout=10)
-        if commit.returncode == 0:
+        top, commit = run("rev-parse", "--show-toplevel"), run("rev-parse", "HEAD")
+        if top.returncode == 0 and commit.returncode == 0:
+            root = pathlib.Path(top.stdout.strip()).resolve()
+            inside = [str(q) for q in paths if q.is_relative_to(root)]
+            dirty = run("status", "--porcelain", "--", *inside)
             return {"commit": commit.stdout.strip(), "dirty": bool(dirty.stdout.strip())}
     except (OSError, subprocess.TimeoutExpired):
         pass

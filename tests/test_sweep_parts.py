@@ -153,6 +153,33 @@ def test_provenance_names_versions_cpu_and_commit():
     assert set(provenance.git()) == {"commit", "dirty"}
 
 
+def test_provenance_counts_an_edited_scene_as_dirty(tmp_path):
+    """The scenes sit beside the package, not in it: an edit to them (a mass, a friction) must
+    mark the manifest's commit dirty as an edit to the code does."""
+    repo = tmp_path / "repo"
+    (repo / "pkg").mkdir(parents=True)
+    (repo / "scenes").mkdir()
+    (repo / "pkg" / "code.py").write_text("x = 1\n")
+    (repo / "scenes" / "room.xml").write_text('<geom mass="1"/>\n')
+
+    def git(*args):
+        subprocess.run(["git", "-C", str(repo), "-c", "user.name=t", "-c", "user.email=t@t", *args],
+                       check=True, capture_output=True)
+
+    git("init", "-q")
+    git("add", ".")
+    git("commit", "-q", "-m", "scene")
+    both = [repo / "pkg", repo / "scenes"]
+    assert provenance.git(both)["dirty"] is False and len(provenance.git(both)["commit"]) == 40
+    (repo / "scenes" / "room.xml").write_text('<geom mass="2"/>\n')
+    assert provenance.git(both)["dirty"] is True
+    assert provenance.git([repo / "pkg"])["dirty"] is False
+    # A scene directory outside the checkout (an installed copy) is left out, not an error.
+    elsewhere = tmp_path / "site-packages" / "scenes"
+    elsewhere.mkdir(parents=True)
+    assert provenance.git([repo / "pkg", elsewhere])["dirty"] is False
+
+
 # ------------------------------------------------------------------------- one minimal sweep
 
 
