@@ -15,13 +15,22 @@ import sys
 from typing import Callable
 
 
+def wants_help(argv: list[str]) -> bool:
+    return any(a in ("-h", "--help", "help") for a in argv)
+
+
 def one_sweep_main(script: str, doc: str, evidence: Callable[[str], object], argv: list[str]) -> int:
     """Run `evidence(sweep path)` for `script`, whose module docstring `doc` has its usage as the
     second paragraph; SweepError becomes `script: message` on stderr and status 2."""
     from mjx_curio.analysis import SweepError
 
+    usage = doc.split("\n\n")[1]
+    if wants_help(argv):
+        print(usage)
+        return 0
     if len(argv) != 1:
-        print(doc.split("\n\n")[1], file=sys.stderr)
+        print(f"{script}: want one sweep directory, got {len(argv)} argument{'s' if len(argv) != 1 else ''}"
+              f"{': ' + ' '.join(argv) if argv else ''}\n{usage}", file=sys.stderr)
         return 2
     try:
         evidence(argv[0])

@@ -185,8 +185,12 @@ def main(argv: list[str]) -> int:
 
     from mjx_curio import analysis as an
 
+    usage = __doc__.splitlines()[2].strip()
+    if any(a in ("-h", "--help", "help") for a in argv):
+        print(usage)
+        return 0
     if not argv:
-        print(__doc__.splitlines()[2].strip(), file=sys.stderr)
+        print(f"full_length_evidence.py: want at least one sweep directory\n{usage}", file=sys.stderr)
         return 2
     try:
         sweeps = [an.load(a) for a in argv]

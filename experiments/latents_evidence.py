@@ -33,10 +33,11 @@ def staleness(path: str) -> dict:
 
     from mjx_curio import analysis as an
     from mjx_curio import world_model as wm
+    from mjx_curio.analysis.action_values import replay_step
 
     sweep = an.load(path)
     cfg = sweep.learner_config()
-    step = max(sweep.replay_steps())
+    step = replay_step(sweep)  # SweepError, before anything is computed, where none kept the buffers
     replay = sweep.restore_replay(step, keys=("frames", "latents", "size", "index"))
     state = sweep.restore_raw(step)
     enc = jax.jit(lambda params, stats, frames: wm.encode(cfg, params, frames, stats))
@@ -131,8 +132,11 @@ def main(argv: list[str]) -> int:
     from mjx_curio.analysis import SweepError
 
     what, args = (argv[0], argv[1:]) if argv else (None, [])
+    usage = "\n".join(f"    python experiments/latents_evidence.py {k} {v}" for k, (_, v) in COMMANDS.items())
+    if any(a in ("-h", "--help", "help") for a in argv):
+        print(usage)
+        return 0
     if what not in COMMANDS or len(args) != COMMANDS[what][0]:
-        usage = "\n".join(f"    python experiments/latents_evidence.py {k} {v}" for k, (_, v) in COMMANDS.items())
         print(f"latents_evidence.py: want one of\n{usage}", file=sys.stderr)
         return 2
     try:

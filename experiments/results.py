@@ -1077,24 +1077,31 @@ def main(argv: list[str]) -> int:
     from mjx_curio.analysis import SweepError
 
     cmd = argv[0] if argv else ""
-    if cmd == "snapshot" and len(argv) <= 2:
+    usage = __doc__.split("\n\n")[1]
+    if any(a in ("-h", "--help", "help") for a in argv):
+        print(usage)
+        return 0
+    takes = {"snapshot": "at most one directory", "page": "no arguments", "check": "no arguments"}
+    if cmd not in takes or len(argv) > (2 if cmd == "snapshot" else 1):
+        why = (f"unknown command {cmd!r}; want snapshot, page or check" if cmd not in takes else
+               f"{cmd} takes {takes[cmd]}, got {' '.join(argv[1:])}") if argv else "want a command"
+        print(f"results.py: {why}\n{usage}", file=sys.stderr)
+        return 2
+    if cmd == "snapshot":
         try:
             snapshot(argv[1] if len(argv) == 2 else ROOT / "runs" / "paper")
         except (SweepError, ValueError) as err:
             print(f"results.py snapshot: {err}", file=sys.stderr)
             return 2
-    elif cmd == "page" and len(argv) == 1:
+    elif cmd == "page":
         write_page()
-    elif cmd == "check" and len(argv) == 1:
+    else:
         stale = check_page()
         if stale:
             print(f"{PAGE}: the {', '.join(stale)} block(s) differ from experiments/results; "
                   "run `python experiments/results.py page`")
             return 1
         print(f"{PAGE} matches experiments/results")
-    else:
-        print(__doc__.split("\n\n")[1], file=sys.stderr)
-        return 2
     return 0
 
 

@@ -462,6 +462,41 @@ KEYS = [
 ]
 
 
+# The benches each key changes; the others ignore it, so a key given for another is a mistake in
+# the command (keys not listed here apply to every bench).
+APPLIES_TO = {
+    "runs": ("env", "sweep", "profile", "convs"),
+    "walls": ("env",),
+    "steps": ("env", "sweep"),
+    "iters": ("learner", "profile", "convs"),
+    "vae_batch": ("learner",),
+    "batch": ("learner", "sweep", "profile", "convs"),
+    "seq_len": ("learner", "sweep", "profile", "convs"),
+    "latents": ("learner", "sweep", "profile"),
+    "vae_layers": ("learner", "sweep", "profile"),
+    "update_every": ("sweep", "profile"),
+    "buffer": ("sweep", "profile"),
+    "parts": ("profile",),
+    "peak_n": ("profile",),
+    "runs_loop": ("sweep", "profile"),
+    "host_devices": ("sweep",),
+    "fidelity": ("sweep",),
+    "checkpoint": ("sweep",),
+    "checkpoint_dir": ("sweep",),
+}
+
+
+def _check_applies(given: set, args: dict) -> None:
+    """Every key the command gave changes the bench it runs."""
+    what = args["what"]
+    for name in sorted(given):
+        if what not in APPLIES_TO.get(name, (what,)):
+            raise ConfigError(f"{name} does not apply to what={what}: only to what={' | '.join(APPLIES_TO[name])}; "
+                              f"drop {name}=, or choose one of those")
+    if "checkpoint_dir" in given and args["checkpoint"] == "none":
+        raise ConfigError("checkpoint_dir applies only when a checkpoint is timed: checkpoint=sync | async | both")
+
+
 def _validate(args: dict) -> None:
     """Checks that need more than one key, done before any work starts."""
     if args["what"] == "env":
@@ -484,11 +519,8 @@ def _validate(args: dict) -> None:
 def _spread_over_cores(args: dict) -> None:
     """The CPU device count, fixed before JAX starts: as the sweep would choose it for
     what=sweep (host_devices.py), one device for the single-program benches."""
-    requested = args["host_devices"]
-    if args["what"] == "sweep":
-        count = host_devices.choose(requested, args["runs"])
-    else:
-        count = 1 if requested == "auto" else requested
+    requested = args["host_devices"]  # auto but for what=sweep (APPLIES_TO)
+    count = host_devices.choose(requested, args["runs"]) if args["what"] == "sweep" else 1
     host_devices.apply(count, requested)
 
 
@@ -505,12 +537,15 @@ def summary(result: dict, indent: str = "") -> str:
 
 
 def main(argv=None) -> dict | None:
+    argv = list(sys.argv[1:] if argv is None else argv)
     args = main_guard(argv, PROG, SUMMARY, KEYS)
     if args is None:
         return None
+    given = {item.partition("=")[0] for item in argv}  # main_guard has checked every item is key=value
     if args["runs"] == "auto":  # the main job's 24 runs; the profile's one run, as it always had
         args["runs"] = 1 if args["what"] == "profile" else 24
     try:
+        _check_applies(given, args)
         _validate(args)
         _spread_over_cores(args)
     except ConfigError as err:

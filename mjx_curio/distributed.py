@@ -22,11 +22,38 @@ def setup_jax(distributed: str, compile_cache: str) -> None:
         # Coordinator, process count and id from the environment: SLURM's or Open MPI's, which
         # JAX reads itself, or plain JAX_COORDINATOR_ADDRESS, JAX_NUM_PROCESSES, JAX_PROCESS_ID.
         count, index = process_env()
-        jax.distributed.initialize(num_processes=count, process_id=index)
-    if compile_cache.lower() != "none":
-        path = pathlib.Path(os.path.expanduser(compile_cache))
-        path.mkdir(parents=True, exist_ok=True)
-        jax.config.update("jax_compilation_cache_dir", str(path))
+        try:
+            jax.distributed.initialize(num_processes=count, process_id=index)
+        except (ValueError, RuntimeError) as err:
+            raise ConfigError(f"distributed={distributed}: joining the cluster failed ({err}); on a cluster set "
+                              "JAX_COORDINATOR_ADDRESS, JAX_NUM_PROCESSES and JAX_PROCESS_ID or run under SLURM "
+                              "or Open MPI; alone, use distributed=auto or false") from None
+    use_compile_cache(compile_cache_dir(compile_cache))
+
+
+def compile_cache_dir(value: str) -> pathlib.Path | None:
+    """The directory `compile_cache=value` names (None for none), checked without making it: a
+    file in its place, or a parent nobody can write, is a ConfigError naming the key."""
+    if value.lower() == "none":
+        return None
+    from mjx_curio.plan import check_creatable
+
+    path = pathlib.Path(os.path.expanduser(value))
+    if path.exists() and not path.is_dir():
+        raise ConfigError(f"compile_cache={value} is a file, not a directory; name a directory (made if missing) "
+                          "or none")
+    check_creatable(path, "compile_cache")
+    return path
+
+
+def use_compile_cache(path: pathlib.Path | None) -> None:
+    """Keep JAX's compiled programs in `path` (made if missing) across processes."""
+    if path is None:
+        return
+    import jax
+
+    path.mkdir(parents=True, exist_ok=True)
+    jax.config.update("jax_compilation_cache_dir", str(path))
 
 
 def process_env() -> tuple[int | None, int | None]:

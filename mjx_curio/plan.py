@@ -57,6 +57,12 @@ class Plan:
 
 
 def grid(values: dict) -> tuple:
+    for policy, setting in POLICY_SETTING.items():
+        if policy not in values["policies"] and len(values[setting]) > 1:
+            given = ",".join(f"{x:g}" for x in values[setting])
+            raise ConfigError(f"{setting}={given} lists several values, but policies={','.join(values['policies'])} "
+                              f"runs no {policy} agents, so none would be used; add {policy} to policies, or give "
+                              f"{setting} one value")
     runs = []
     for policy in values["policies"]:
         settings = values[POLICY_SETTING[policy]]
@@ -86,7 +92,8 @@ def plan(values: dict, now: datetime.datetime | None = None) -> Plan:
         out = pathlib.Path("runs") / now.strftime("%Y%m%d-%H%M%S")
         while out.exists():
             out = out.with_name(out.name + "x")
-    _check_writable(out)
+    check_creatable(out)
+    distributed.compile_cache_dir(v["compile_cache"])
     if distributed.rank_from_env() == 0:  # on a cluster, process 0 holds the lock
         dirlock.check_free(out)
     manifest = out / "manifest.json"
@@ -111,18 +118,18 @@ def plan(values: dict, now: datetime.datetime | None = None) -> Plan:
     return Plan(v, sweep, run, runs, out, False)
 
 
-def _check_writable(out: pathlib.Path) -> None:
-    """`out` is a directory that exists or can be made: its nearest existing ancestor is a
-    writable directory. Checked by asking, not by making anything."""
-    probe = out.absolute()
+def check_creatable(path: pathlib.Path, key: str = "out") -> None:
+    """`path`, the directory `key` names, exists or can be made: its nearest existing ancestor
+    is a writable directory. Checked by asking, not by making anything."""
+    probe = path.absolute()
     while not probe.exists():
         if probe.parent == probe:
             break
         probe = probe.parent
-    if probe != out.absolute() and (not probe.is_dir() or not os.access(probe, os.W_OK | os.X_OK)
-                                    or _pseudo_fs(probe)):
+    if probe != path.absolute() and (not probe.is_dir() or not os.access(probe, os.W_OK | os.X_OK)
+                                     or _pseudo_fs(probe)):
         why = "is not a directory" if not probe.is_dir() else "is not writable"
-        raise ConfigError(f"out={out} cannot be created: {probe} {why}; choose a directory you can write")
+        raise ConfigError(f"{key}={path} cannot be created: {probe} {why}; choose a directory you can write")
 
 
 def _pseudo_fs(path: pathlib.Path) -> bool:
@@ -191,9 +198,22 @@ def _show(x) -> str:
 
 
 def read_manifest(out: pathlib.Path) -> dict:
-    return json.loads((pathlib.Path(out) / "manifest.json").read_text())
+    return _read_object(pathlib.Path(out) / "manifest.json")
 
 
 def read_progress(out: pathlib.Path) -> dict:
     p = pathlib.Path(out) / "progress.json"
-    return json.loads(p.read_text()) if p.is_file() else {}
+    return _read_object(p) if p.is_file() else {}
+
+
+def _read_object(path: pathlib.Path) -> dict:
+    """A sweep's JSON file, or a ConfigError naming it (a damaged file is not a sweep to resume)."""
+    try:
+        obj = json.loads(path.read_text())
+    except (OSError, UnicodeDecodeError, json.JSONDecodeError) as err:
+        raise ConfigError(f"{path} cannot be read as a sweep's JSON ({err}); the directory is not a sweep this "
+                          "command can resume: restore the file, or choose another out") from None
+    if not isinstance(obj, dict):
+        raise ConfigError(f"{path} holds a JSON {type(obj).__name__}, not a sweep's object; the directory is not a "
+                          "sweep this command can resume: restore the file, or choose another out")
+    return obj

@@ -56,6 +56,8 @@ def execute(p: Plan) -> int:
 
     try:
         _spread_over_cores(p)
+        # Joining a cluster can fail (no coordinator); it does before out is made or locked.
+        distributed.setup_jax(p.values["distributed"], p.values["compile_cache"])
     except ConfigError as err:
         print(f"error: {err}", file=sys.stderr)
         return 2
@@ -128,18 +130,16 @@ def _spread_over_cores(p: Plan) -> None:
 def _execute(p: Plan, stop: _StopSignals) -> int:
     import dataclasses
 
-    from mjx_curio import distributed
-
-    v = p.values
-    distributed.setup_jax(v["distributed"], v["compile_cache"])
     import jax
 
     from mjx_curio import checkpoint as ckpt_lib
+    from mjx_curio import distributed
     from mjx_curio import host_devices
     from mjx_curio import metrics as metrics_lib
     from mjx_curio import provenance
     from mjx_curio.program import SweepProgram
 
+    v = p.values
     devices = jax.devices()
     lead = jax.process_index() == 0
     runs_loop = p.sweep.runs_loop if p.sweep.runs_loop != "auto" else ("map" if devices[0].platform == "cpu" else "vmap")

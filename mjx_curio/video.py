@@ -26,7 +26,6 @@ from __future__ import annotations
 import dataclasses
 import importlib.util
 import math
-import os
 import pathlib
 import shutil
 import subprocess
@@ -48,7 +47,7 @@ KEYS = (
     Key("run", "0", "run index (the manifest's order) or run name", as_str),
     Key("step", -1, "checkpoint to start from: -1 the newest, 0 the run's start (no checkpoint needed)", as_int(-1)),
     Key("frames", 300, "agent steps to film, one video frame each", as_int(1)),
-    Key("out", "", "output file, .mp4 or .gif (.gif without an MP4 encoder)", as_str,
+    Key("out", "", "output file, .mp4 or .gif (.gif without an MP4 encoder); one that exists is refused", as_str,
         shown="<sweep>/videos/<run>-from<step>.mp4"),
     Key("fps", 15, "video frames per second (the arena runs 60 steps per simulated second)", as_int(1, 100)),
     Key("scale", 0, "magnification of the egocentric views (0: to about 128 px)", as_int(0, 64)),
@@ -335,23 +334,48 @@ def mp4_encoder() -> tuple[str, str] | None:
 
 def write_video(frames: np.ndarray, path: str | pathlib.Path, fps: int = 15) -> pathlib.Path:
     """Write uint8 frames [T, H, W, 3] to `path` (.mp4 or .gif). An .mp4 without an encoder is
-    written as .gif next to it (same name), with a note on stderr. Returns the path written."""
+    written as .gif next to it (same name), with a note on stderr. Returns the path written. A
+    file already there is a VideoError: nothing is overwritten."""
+    target = written_path(path)
+    refuse_existing([target])
+    target.parent.mkdir(parents=True, exist_ok=True)
+    frames = np.asarray(frames, np.uint8)
+    if target.suffix.lower() == ".mp4":
+        _write_mp4(frames, target, fps, mp4_encoder())
+        return target
+    if target.suffix.lower() != pathlib.Path(path).suffix.lower():
+        print(f"note: no MP4 encoder (ffmpeg, imageio-ffmpeg or PyAV) is installed; writing {target}", file=sys.stderr)
+    _write_gif(frames, target, fps)
+    return target
+
+
+def written_path(path: str | pathlib.Path) -> pathlib.Path:
+    """Where `write_video(..., path)` writes: `path`, or for an .mp4 with no encoder here the .gif
+    beside it. Any other ending is a VideoError."""
     path = pathlib.Path(path)
     ext = path.suffix.lower()
     if ext not in (".mp4", ".gif"):
         raise VideoError(f"out={path}: the file must end in .mp4 or .gif")
-    path.parent.mkdir(parents=True, exist_ok=True)
-    frames = np.asarray(frames, np.uint8)
-    if ext == ".mp4":
-        enc = mp4_encoder()
-        if enc is None:
-            path = path.with_suffix(".gif")
-            print(f"note: no MP4 encoder (ffmpeg, imageio-ffmpeg or PyAV) is installed; writing {path}", file=sys.stderr)
-        else:
-            _write_mp4(frames, path, fps, enc)
-            return path
-    _write_gif(frames, path, fps)
-    return path
+    return path.with_suffix(".gif") if ext == ".mp4" and mp4_encoder() is None else path
+
+
+def video_paths(out: str | pathlib.Path, split: bool, agent_names: Sequence[str], top: bool) -> list[pathlib.Path]:
+    """The files `film` writes for `out`: `out` itself, or with `split` one per agent
+    (`<out>-<agent>.<ext>`, `<out>-agent.<ext>` for a lone agent) and `<out>-top.<ext>` with a
+    top-down view."""
+    out = pathlib.Path(out)
+    if not split:
+        return [out]
+    names = list(agent_names) if len(agent_names) > 1 else ["agent"]
+    return [out.with_name(f"{out.stem}-{name}{out.suffix}") for name in names + (["top"] if top else [])]
+
+
+def refuse_existing(paths: Sequence[pathlib.Path]) -> None:
+    """A VideoError if any of `paths` exists: a video never replaces a file."""
+    there = [str(p) for p in paths if p.exists()]
+    if there:
+        raise VideoError(f"{', '.join(there)} already exist{'s' if len(there) == 1 else ''}; nothing is "
+                         "overwritten: choose another out=, or move the file away")
 
 
 def _write_gif(frames: np.ndarray, path: pathlib.Path, fps: int) -> None:
@@ -393,29 +417,44 @@ def film(ro: Rollout, out: str | pathlib.Path, fps: int = 15, scale: int = 0, sp
     """Draw a rollout and write it: one side-by-side video (every agent, then the top-down view),
     or with `split` one file per agent (`<out>-<agent>.<ext>`) and one for the top-down view
     (`<out>-top.<ext>`). Returns the paths written."""
-    out = pathlib.Path(out)
+    paths = video_paths(out, split, ro.agent_names, ro.top is not None)
+    refuse_existing([written_path(p) for p in paths])  # before any is written
     agents = agent_panels(ro, scale)
     top = top_panel(ro)
-    if not split:
-        return [write_video(side_by_side(agents + ([top] if top is not None else [])), out, fps)]
-    names = [ro.agent_names[a] if len(agents) > 1 else "agent" for a in range(len(agents))]
-    parts = list(zip(names, agents)) + ([("top", top)] if top is not None else [])
-    return [write_video(p, out.with_name(f"{out.stem}-{name}{out.suffix}"), fps) for name, p in parts]
+    panels = [side_by_side(agents + ([top] if top is not None else []))] if not split else \
+        agents + ([top] if top is not None else [])
+    return [write_video(p, path, fps) for p, path in zip(panels, paths)]
 
 
 def make_video(sweep_dir, run="0", step: int = -1, frames: int = 300, out: str = "", fps: int = 15, scale: int = 0,
-               top: int = 192, split: bool = False, learn: bool = True) -> list[pathlib.Path]:
-    """Everything `python -m mjx_curio.video` does, as a function. Returns the paths written."""
-    from mjx_curio import analysis
+               top: int = 192, split: bool = False, learn: bool = True,
+               compile_cache: str | None = None) -> list[pathlib.Path]:
+    """Everything `python -m mjx_curio.video` does, as a function. Returns the paths written.
+    Every check (the run, the step, files already at the output paths, `compile_cache`: a
+    ConfigError) comes before anything is compiled or written; `compile_cache` None leaves JAX's
+    cache setting as it is."""
+    from mjx_curio import analysis, distributed
 
     sweep = analysis.load(sweep_dir)
     r = sweep.run(int(run) if str(run).lstrip("-").isdigit() else str(run))
     if step > 0:
         sweep.check_step(step)
-    ro = rollout(sweep, r.index, step, frames, top, learn)
-    if not out:
+    elif step < 0:
+        steps = sweep.checkpoint_steps()
+        if not steps:
+            raise VideoError(f"{sweep.path} has no checkpoints (use step=0 to film the run from its start)")
+        step = steps[-1]
+    if not out:  # the first free name: a second video of the same start goes beside the first
         ext = ".mp4" if mp4_encoder() else ".gif"
-        out = sweep.path / "videos" / f"{r.name}-from{ro.start_step}{ext}"
+        stem, n = f"{r.name}-from{step}", 1
+        out = sweep.path / "videos" / f"{stem}{ext}"
+        while any(written_path(p).exists() for p in video_paths(out, split, sweep.agent_names, top > 0)):
+            n += 1
+            out = out.with_name(f"{stem}-{n}{ext}")
+    refuse_existing([written_path(p) for p in video_paths(out, split, sweep.agent_names, top > 0)])
+    cache = distributed.compile_cache_dir(compile_cache) if compile_cache is not None else None
+    distributed.use_compile_cache(cache)
+    ro = rollout(sweep, r.index, step, frames, top, learn)
     return film(ro, out, fps, scale, split)
 
 
@@ -430,28 +469,17 @@ def main(argv=None) -> int:
         print(f"error: out={v['out']}: the file must end in .mp4 or .gif", file=sys.stderr)
         return 2
     from mjx_curio import analysis
+    from mjx_curio.config import ConfigError
 
     try:
-        analysis.load(v["sweep"])  # every input check before compiling anything
-        _setup_cache(v["compile_cache"])
         paths = make_video(v["sweep"], v["run"], v["step"], v["frames"], v["out"], v["fps"], v["scale"], v["top"],
-                           v["split"], v["learn"])
-    except (analysis.SweepError, VideoError) as err:
+                           v["split"], v["learn"], v["compile_cache"])
+    except (analysis.SweepError, VideoError, ConfigError) as err:
         print(f"error: {err}", file=sys.stderr)
         return 2
     for p in paths:
         print(p)
     return 0
-
-
-def _setup_cache(cache: str) -> None:
-    if cache.lower() == "none":
-        return
-    import jax
-
-    path = pathlib.Path(os.path.expanduser(cache))
-    path.mkdir(parents=True, exist_ok=True)
-    jax.config.update("jax_compilation_cache_dir", str(path))
 
 
 if __name__ == "__main__":

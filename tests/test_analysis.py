@@ -586,6 +586,11 @@ def test_missing_parts(tiny_sweep, tmp_path):
     f = _copy_without(tiny_sweep, tmp_path / "c", "progress.json")
     with pytest.raises(an.SweepError, match="no finished metrics yet"):
         an.load(f)
+    for text, why in (("{not json", "is not valid JSON"), ("[1, 2]", "a JSON list, not the sweep's progress")):
+        (f / "progress.json").write_text(text)
+        with pytest.raises(an.SweepError, match=why) as err:
+            an.load(f)
+        assert str(f / "progress.json") in str(err.value)
 
 
 def test_missing_checkpoint_step(sweep):

@@ -98,6 +98,20 @@ def test_bad_checkpoint_timing_input_is_refused_before_any_work(args, knob, allo
     assert exit_.value.code == 2 and knob in err and all(a in err for a in allowed.split(", ")), err
 
 
+@pytest.mark.parametrize("args, knob, allowed", [
+    (["what=learner", "walls=different"], "walls", "what=env"),
+    (["what=env", "parts=encoding"], "parts", "what=profile"),
+    (["what=learner", "runs_loop=vmap"], "runs_loop", "what=sweep | profile"),
+    (["what=profile", "host_devices=2"], "host_devices", "what=sweep"),
+    (["what=sweep", "checkpoint_dir=/tmp"], "checkpoint_dir", "checkpoint=sync | async | both"),
+])
+def test_a_key_the_bench_ignores_is_refused_before_any_work(args, knob, allowed, capsys):
+    with pytest.raises(SystemExit) as exit_:
+        bench.main(args)
+    err = capsys.readouterr().err
+    assert exit_.value.code == 2 and knob in err and allowed in err, err
+
+
 def test_the_checkpoint_timing_fills_each_replay_with_copies_of_its_written_steps():
     """bench what=sweep checkpoint=...: an unfilled replay would checkpoint as zeros, which
     compress to nothing; each run's buffer is filled by repeating what it wrote (NumPy's view of

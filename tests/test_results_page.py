@@ -383,6 +383,8 @@ def _refuses_bad_sweeps(module, script: str, tiny_sweep, tmp_path, capsys) -> No
     metrics_only = _copy_sweep(tiny_sweep, tmp_path / "metrics_only")
     assert module.main([str(metrics_only)]) == 2 and f"{script}:" in capsys.readouterr().err
     assert module.main([]) == 2 and f"{script} runs/paper" in capsys.readouterr().err
+    assert module.main(["a", "b"]) == 2 and "want one sweep directory, got 2 arguments" in capsys.readouterr().err
+    assert module.main(["--help"]) == 0 and f"{script} runs/paper" in capsys.readouterr().out
     assert not (tmp_path / "out").exists()
 
 
@@ -716,7 +718,10 @@ def test_bad_command_lines_are_messages_not_tracebacks(results, tmp_path, capsys
     assert results.main(["snapshot", str(tmp_path)]) == 2  # a directory with no sweep in it
     assert "no manifest.json" in capsys.readouterr().err
     assert results.main(["draw"]) == 2
-    assert "results.py page" in capsys.readouterr().err
+    err = capsys.readouterr().err
+    assert "unknown command 'draw'" in err and "results.py page" in err
+    assert results.main(["page", "extra"]) == 2 and "page takes no arguments" in capsys.readouterr().err
+    assert results.main(["--help"]) == 0 and "results.py check" in capsys.readouterr().out
     assert not any(tmp_path.iterdir())  # nothing written
 
 

@@ -431,6 +431,10 @@ def test_diverged_physics_halts_that_run_only_and_masks_its_windows(tiny_sweep, 
         (["vae_channels=32,64"], "dec_channels=128,64,32,16", "one width per encoder layer"),
         (["latents=fresh"], "latents='fresh'", "'stored', 'reencode'"),
         (["async_checkpoints=yes"], "async_checkpoints='yes'", "'auto', 'true', 'false'"),
+        (["policies=ucb", "eps=0.1,0.5"], "eps=0.1,0.5 lists several values", "add eps to policies"),
+        (["compile_cache=/dev/null"], "compile_cache=/dev/null is a file", "name a directory"),
+        # Alone, with no cluster to join: refused before out is made or locked.
+        (["distributed=true"], "distributed=true: joining the cluster failed", "JAX_COORDINATOR_ADDRESS"),
     ],
 )
 def test_bad_input_stops_before_any_work(args, knob, allowed, tmp_path):
@@ -470,6 +474,16 @@ def test_plan_refuses_a_non_sweep_directory(tmp_path):
     with pytest.raises(ConfigError, match="holds no sweep"):
         sweep_lib.plan(values)
     assert [p.name for p in tmp_path.iterdir()] == ["notes.txt"]
+
+
+@pytest.mark.parametrize("text, why", [("{not json", "cannot be read as a sweep's JSON"), ("[1, 2]", "a JSON list")])
+def test_resume_refuses_a_damaged_manifest_naming_it(text, why, tmp_path):
+    (tmp_path / "manifest.json").write_text(text)
+    values = sweep_lib.cli.parse([f"out={tmp_path}", "resume=true"], sweep_lib.KEYS)
+    with pytest.raises(ConfigError, match=why) as err:
+        sweep_lib.plan(values)
+    assert str(tmp_path / "manifest.json") in str(err.value)
+    assert (tmp_path / "manifest.json").read_text() == text
 
 
 def test_grid_multiplies_each_policy_by_its_own_setting_only():

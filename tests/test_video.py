@@ -139,14 +139,19 @@ def test_write_video(tmp_path, capsys):
     frames = rng.integers(0, 255, size=(5, 21, 30, 3), dtype=np.uint8)
     gif = video.write_video(frames, tmp_path / "a.gif", fps=5)
     assert _frames(gif, 5) == (5, (30, 21))
-    mp4 = video.write_video(frames, tmp_path / "a.mp4", fps=5)
+    mp4 = video.write_video(frames, tmp_path / "m.mp4", fps=5)
     if _has_imageio_ffmpeg():  # part of the analysis and dev extras: MP4 with no system ffmpeg
         assert video.mp4_encoder() is not None
     if video.mp4_encoder() is None:
-        assert mp4 == tmp_path / "a.gif" and "no MP4 encoder" in capsys.readouterr().err
+        assert mp4 == tmp_path / "m.gif" and "no MP4 encoder" in capsys.readouterr().err
     else:
-        assert mp4 == tmp_path / "a.mp4" and mp4.read_bytes()[4:8] == b"ftyp"  # an MP4 (ISO BMFF) file
+        assert mp4 == tmp_path / "m.mp4" and mp4.read_bytes()[4:8] == b"ftyp"  # an MP4 (ISO BMFF) file
         assert _frames(mp4, 5) == (5, (30, 22))
+    # Nothing is overwritten: the same path again is an error, and the file stays as it was.
+    before = gif.read_bytes()
+    with pytest.raises(video.VideoError, match="already exists"):
+        video.write_video(frames[:2], gif, fps=5)
+    assert gif.read_bytes() == before
 
 
 @pytest.mark.skipif(not _has_imageio_ffmpeg(), reason="imageio-ffmpeg is not installed (pip install -e '.[dev]')")
@@ -180,4 +185,17 @@ def test_cli_errors(tiny_sweep, tmp_path, capsys):
     assert "out of range" in err(f"sweep={tiny_sweep}", "run=8")
     assert "no run named" in err(f"sweep={tiny_sweep}", "run=nope")
     assert "unknown key" in err(f"sweep={tiny_sweep}", "colour=red")
+    # A file at the output path is refused before anything is compiled, and left as it was; so
+    # is one at any of split's paths.
+    there = tmp_path / "there.gif"
+    there.write_bytes(b"not a video")
+    assert "already exists" in err(f"sweep={tiny_sweep}", f"out={there}")
+    (tmp_path / "v-top.gif").write_bytes(b"")
+    assert "v-top.gif already exists" in err(f"sweep={tiny_sweep}", f"out={tmp_path / 'v.gif'}", "split=true")
+    assert there.read_bytes() == b"not a video" and not (tmp_path / "v-green.gif").exists()
+    # compile_cache naming a file is an error naming the key; a bad run makes no cache directory.
+    rc = video.main([f"sweep={tiny_sweep}", f"compile_cache={there}"])
+    assert rc == 2 and "compile_cache=" in capsys.readouterr().err
+    rc = video.main([f"sweep={tiny_sweep}", "run=8", f"compile_cache={tmp_path / 'cache'}"])
+    assert rc == 2 and "out of range" in capsys.readouterr().err and not (tmp_path / "cache").exists()
     assert video.main(["--help"]) == 0 and "top-down" in capsys.readouterr().out

@@ -383,7 +383,12 @@ def load(path: str | pathlib.Path) -> Sweep:
     if not mdir.is_dir():
         raise SweepError(f"{path} has no metrics directory ({mdir} does not exist)")
     ppath = path / "progress.json"
-    progress = json.loads(ppath.read_text()) if ppath.is_file() else {}
+    try:
+        progress = json.loads(ppath.read_text()) if ppath.is_file() else {}
+    except (json.JSONDecodeError, UnicodeDecodeError) as err:
+        raise SweepError(f"{ppath} is not valid JSON ({err})") from None
+    if not isinstance(progress, dict):
+        raise SweepError(f"{ppath} holds a JSON {type(progress).__name__}, not the sweep's progress object")
     every = int(manifest["metrics"]["every"])
     windows_done = int(progress.get("windows_done", int(progress.get("steps_done", 0)) // every))
     if windows_done <= 0:
