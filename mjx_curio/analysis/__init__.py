@@ -1,7 +1,7 @@
 """Read a sweep directory and redraw the paper's figures from it.
 
     from mjx_curio import analysis
-    sweep = analysis.load("runs/paper")             # manifest, metrics, checkpoints
+    sweep = analysis.load("runs/paper/multi_agent")  # one sweep: manifest, metrics, checkpoints
     sweep.runs, sweep.steps, sweep.metrics["curiosity"]   # [runs], [windows], [runs, windows, agents]
     ucb = sweep.select(policy="ucb")                 # run indices
     fig, ax = plt.subplots(); analysis.plot_curiosity(sweep, ax, "ucb")
