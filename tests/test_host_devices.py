@@ -4,6 +4,7 @@ Whether the runs of a sweep spread over devices give the runs' own results is as
 sharding test in test_sweep.py (its sweep asks for host_devices=2); here: which count is chosen,
 from what, and that a bad value is refused before any work."""
 
+import io
 import os
 
 import pytest
@@ -19,9 +20,27 @@ def no_flag(monkeypatch):
     monkeypatch.setenv("XLA_FLAGS", flags)
 
 
-def test_physical_cores_counts_each_core_once():
+def test_physical_cores_counts_each_core_once(monkeypatch):
     cores = host_devices.physical_cores()
     assert 1 <= cores <= len(os.sched_getaffinity(0))
+    # A made-up topology: CPUs 0-3 are two cores with two hyperthreads each on package 0, CPU 4
+    # is core 0 of package 1 (a core id repeats across packages), CPU 5 has no topology files.
+    topology = {0: ("0", "0"), 1: ("0", "0"), 2: ("0", "1"), 3: ("0", "1"), 4: ("1", "0")}
+
+    def fake_open(path, *args, **kwargs):
+        cpu = int(path.split("/cpu/cpu")[1].split("/")[0])
+        if cpu not in topology:
+            raise FileNotFoundError(path)
+        package, core = topology[cpu]
+        return io.StringIO(core if path.endswith("core_id") else package)
+
+    monkeypatch.setattr(host_devices.os, "sched_getaffinity", lambda pid: {0, 1, 2, 3, 4, 5})
+    monkeypatch.setattr(host_devices, "open", fake_open, raising=False)
+    assert host_devices.physical_cores() == 4  # (0, 0), (0, 1), (1, 0) and CPU 5 on its own
+    monkeypatch.setattr(host_devices.os, "sched_getaffinity", lambda pid: {1, 3})
+    assert host_devices.physical_cores() == 2
+    monkeypatch.setattr(host_devices.os, "sched_getaffinity", lambda pid: {0, 1})
+    assert host_devices.physical_cores() == 1
 
 
 def test_auto_is_the_most_devices_the_cores_allow_with_at_most_a_tenth_padding(no_flag, monkeypatch):

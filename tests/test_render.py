@@ -206,7 +206,10 @@ def test_geom_ids_match_mujoco_renderer(scene, make_gl):
             assert len(np.unique(truths[k, a])) >= 3
     agreement = [float(np.mean(truth == gids[k, a])) for (k, a), truth in truths.items()]
     print(f"{scene}: pixel agreement with MuJoCo min {min(agreement):.4f} mean {np.mean(agreement):.4f}")
-    assert min(agreement) >= 0.95, agreement
+    # Measured on an Intel Xeon: min 0.9968-0.9998, mean 0.9995-1.0000 over the four scenes; the
+    # bounds leave two to three times the disagreement seen, and a missing or misplaced object
+    # (hundreds of pixels of a 4096-pixel view) fails them.
+    assert min(agreement) >= 0.99 and np.mean(agreement) >= 0.999, agreement
 
     # Hand-checked: from (0, -1) facing +x, the ray through the image centre runs along y = -1
     # at eye height 0.4 and meets only the east wall; the bottom row is floor, the top row sky.
@@ -230,8 +233,8 @@ def _nearest(n, size):
 def test_authors_camera_matches_mujoco_at_640x480_resized(scene, make_gl):
     """The authors' camera (their code renders 640 x 480 at fovy 90 and resizes to 64 x 64): our
     64 x 64 image, ray cast directly, against MuJoCo's segmentation render of the same camera
-    at 640 x 480 reduced to 64 x 64 by nearest-pixel sampling. Every view agrees on >= 98% of
-    its pixels (measured: see the printed line). The square camera must fail the same
+    at 640 x 480 reduced to 64 x 64 by nearest-pixel sampling. Every view agrees on >= 99.5% of
+    its pixels and the views on >= 99.9% on average (measured: see the printed line). The square camera must fail the same
     comparison: the check sees the squeeze."""
     m = _model(scene)
     gl = make_gl(m, *AUTHORS)
@@ -259,7 +262,8 @@ def test_authors_camera_matches_mujoco_at_640x480_resized(scene, make_gl):
     print(f"{scene}: authors' camera vs MuJoCo 640x480 resized: min {min(agreement):.4f} "
           f"mean {np.mean(agreement):.4f} over {len(agreement)} views; the square camera: mean "
           f"{np.mean(square_agreement):.4f}")
-    assert min(agreement) >= 0.98, agreement
+    # The README's claim: >= 99.9 % of pixels (measured mean 0.9998-0.9999, min 0.9990).
+    assert min(agreement) >= 0.995 and np.mean(agreement) >= 0.999, agreement
     assert min(square_agreement) < 0.98 and np.mean(square_agreement) < np.mean(agreement) - 0.02, square_agreement
 
     # Hand-checked: from (0, -1) facing +x the image centre sees the east wall; the bottom row

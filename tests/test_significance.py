@@ -140,12 +140,12 @@ def test_holm_by_hand():
     q = sig.holm([0.01, 0.04, 0.03, np.nan, 0.005])
     np.testing.assert_allclose(q, [0.03, 0.06, 0.06, np.nan, 0.02])
     assert sig.holm([0.5, 0.9])[1] == 1.0 and sig.holm([]).shape == (0,)
-    try:  # an independent implementation where one is installed (neither is a dependency)
-        from statsmodels.stats.multitest import multipletests
-    except ImportError:
-        return
-    p = np.random.default_rng(0).uniform(0, 0.1, 12)
-    np.testing.assert_allclose(sig.holm(p), multipletests(p, method="holm")[1])
+    # Holm's definition, written out: the i-th smallest p-value's adjusted value is the largest
+    # of (m - j) p_(j) over j <= i, capped at 1.
+    p = np.random.default_rng(0).uniform(0, 0.3, 12)
+    ranked = np.sort(p)
+    by_rank = [min(1.0, max((len(p) - j) * ranked[j] for j in range(i + 1))) for i in range(len(p))]
+    np.testing.assert_allclose(sig.holm(p), np.array(by_rank)[np.argsort(np.argsort(p))])
 
 
 @pytest.mark.parametrize("means,level", [((0.0, 1.0), "at"), ((0.0, 0.5, 1.0, 1.0), "below")])
@@ -161,8 +161,8 @@ def test_equivalence_bound_keeps_its_level(means, level):
     sd = math.sqrt(0.05 * 0.95 / reps)  # the binomial spread of the rate, 0.004
     if level == "at":
         assert called == pytest.approx(0.05, abs=4 * sd), called
-    else:
-        assert called <= 0.05 + 4 * sd, called
+    else:  # ... but not never: a bound that can never fall below D would pass the first check
+        assert 0.002 < called <= 0.05 + 4 * sd, called
 
 def test_pearson_r_known_values():
     x = np.arange(10.0)
