@@ -126,6 +126,21 @@ def test_cli_split(sweep, tiny_sweep, tmp_path, capsys):
             assert got == (size[0] + size[0] % 2, size[1] + size[1] % 2)
 
 
+def test_a_second_video_of_the_same_start_goes_beside_the_first(tiny_sweep, tmp_path, capsys):
+    """The default name, <sweep>/videos/<run>-from<step>.<ext>, is taken: the next is -2, and the
+    first video stays as it was (on a copy of the sweep, which the other tests share)."""
+    copy = pathlib.Path(shutil.copytree(tiny_sweep, tmp_path / "sweep"))
+    argv = [f"sweep={copy}", "run=1", "step=200", "frames=2", f"top={TOP}", "compile_cache=none"]
+    assert video.main(argv) == 0
+    first = pathlib.Path(capsys.readouterr().out.split()[0])
+    before = first.read_bytes()
+    assert video.main(argv) == 0
+    second = pathlib.Path(capsys.readouterr().out.split()[0])
+    ext = first.suffix
+    assert first.name == f"{an.load(copy).runs[1].name}-from200{ext}" and first.parent == copy / "videos"
+    assert second == first.with_name(f"{first.stem}-2{ext}") and first.read_bytes() == before
+
+
 def _has_imageio_ffmpeg():
     try:
         import imageio_ffmpeg  # noqa: F401
