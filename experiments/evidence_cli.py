@@ -15,14 +15,11 @@ import sys
 from typing import Callable
 
 
-def wants_help(argv: list[str]) -> bool:
-    return any(a in ("-h", "--help", "help") for a in argv)
-
-
 def one_sweep_main(script: str, doc: str, evidence: Callable[[str], object], argv: list[str]) -> int:
     """Run `evidence(sweep path)` for `script`, whose module docstring `doc` has its usage as the
     second paragraph; SweepError becomes `script: message` on stderr and status 2."""
     from mjx_curio.analysis import SweepError
+    from mjx_curio.cli import wants_help
 
     usage = doc.split("\n\n")[1]
     if wants_help(argv):

@@ -184,9 +184,10 @@ def main(argv: list[str]) -> int:
     import results
 
     from mjx_curio import analysis as an
+    from mjx_curio.cli import wants_help
 
     usage = __doc__.splitlines()[2].strip()
-    if any(a in ("-h", "--help", "help") for a in argv):
+    if wants_help(argv):
         print(usage)
         return 0
     if not argv:

@@ -130,10 +130,11 @@ def main(argv: list[str]) -> int:
     """`staleness SWEEP` or `curves STORED REENCODE`; anything else, or a sweep that cannot be read
     (SweepError), is a message and exit status 2, before anything is written."""
     from mjx_curio.analysis import SweepError
+    from mjx_curio.cli import wants_help
 
     what, args = (argv[0], argv[1:]) if argv else (None, [])
     usage = "\n".join(f"    python experiments/latents_evidence.py {k} {v}" for k, (_, v) in COMMANDS.items())
-    if any(a in ("-h", "--help", "help") for a in argv):
+    if wants_help(argv):
         print(usage)
         return 0
     if what not in COMMANDS or len(args) != COMMANDS[what][0]:

@@ -1075,10 +1075,11 @@ def main(argv: list[str]) -> int:
     import mjx_curio  # noqa: F401  (the package's XLA flags, should anything start JAX)
 
     from mjx_curio.analysis import SweepError
+    from mjx_curio.cli import wants_help
 
     cmd = argv[0] if argv else ""
     usage = __doc__.split("\n\n")[1]
-    if any(a in ("-h", "--help", "help") for a in argv):
+    if wants_help(argv):
         print(usage)
         return 0
     takes = {"snapshot": "at most one directory", "page": "no arguments", "check": "no arguments"}
