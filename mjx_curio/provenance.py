@@ -94,8 +94,9 @@ def git(paths=None) -> dict:
     """The commit of the checkout this package runs from, and whether what sets a run's results
     differs from it: the package's code and the scenes it loads (the arena's masses, damping,
     friction, timestep and textures live in their XML, outside the package's directory in a
-    checkout). paths: the directories to look at, the first inside the checkout (default those
-    two); any outside the checkout (an installed copy) are left out."""
+    checkout). paths: the directories to look at, the first the package's (default those two);
+    any outside the checkout are left out. A package git does not track there (an installed copy
+    whose site-packages lies inside some other repository, such as pyenv's) has no commit."""
     if paths is None:
         from mjx_curio.arena import SCENES
 
@@ -107,7 +108,8 @@ def git(paths=None) -> dict:
 
     try:
         top, commit = run("rev-parse", "--show-toplevel"), run("rev-parse", "HEAD")
-        if top.returncode == 0 and commit.returncode == 0:
+        tracked = run("ls-files", "--", str(paths[0]))
+        if top.returncode == 0 and commit.returncode == 0 and tracked.stdout.strip():
             root = pathlib.Path(top.stdout.strip()).resolve()
             inside = [str(q) for q in paths if q.is_relative_to(root)]
             dirty = run("status", "--porcelain", "--", *inside)

@@ -178,6 +178,10 @@ def test_provenance_counts_an_edited_scene_as_dirty(tmp_path):
     elsewhere = tmp_path / "site-packages" / "scenes"
     elsewhere.mkdir(parents=True)
     assert provenance.git([repo / "pkg", elsewhere])["dirty"] is False
+    # A package the checkout does not track (an installed copy in a site-packages that lies inside
+    # another repository) is not that repository's commit.
+    (repo / "site" / "pkg").mkdir(parents=True)
+    assert provenance.git([repo / "site" / "pkg"]) == {"commit": None, "dirty": None}
 
 
 # ------------------------------------------------------------------------- one minimal sweep
