@@ -1,6 +1,6 @@
 """The paper's experiments at their full length: 80,000 steps, where the committed runs stop at 40,000.
 
-    python experiments/full_length_evidence.py runs/h200/main [runs/h200/single_agent ...]
+    python experiments/full_length_evidence.py runs/h200/main [runs/paper/single_agent_80k ...]
 
 The main job (`python -m mjx_curio.sweep policies=eps,boltzmann,ucb seeds=8`: two agents, the
 three policies, 8 seeds a policy, the paper's 80,000 steps) takes about a day on a 2-core CPU, so
@@ -8,10 +8,14 @@ the committed runs (experiments/results/) stop at 40,000 steps. A GPU runs the w
 minutes (docs/cost_model.md). Such sweeps' metrics, about 25 MB each, are not committed; this
 script reduces them to what the results page shows and writes docs/results/full_length.json. Each
 sweep given stands for the preset whose settings it has (`analysis.assign_presets`: the main job
-is `multi_agent`) and is compared with that preset's committed runs:
+is `multi_agent`) and is compared with that preset's committed runs of the same settings, all
+their seeds (a full-length sweep may run some of the preset's policies and seeds: on a CPU, one
+agent's ε-greedy runs, fig. 8's setting, take hours where all of its runs take days). The file
+keeps what it holds of presets not given this time, so that sweeps measured on different
+machines, or in different sessions, stand side by side:
 
 - `claims`: the paper's claims that the given sweeps can test (`analysis.claims_table` on them
-  alone), at their full length;
+  alone), at their full length, each row with the presets it was computed from (`presets`);
 - `platforms`: the sweep against the committed CPU runs over the steps both ran, policy by policy
   (`analysis.walls_measures`: late curiosity, the VAE loss per image and its reconstruction term
   over the last 10,000 of those steps, object contacts per 1,000 agent-steps over all of them);
@@ -26,8 +30,9 @@ is `multi_agent`) and is compared with that preset's committed runs:
   with objects and between the agents summed from the start, for both sets of runs, from which
   `results.py page` draws the figures.
 
-Per sweep (`sweeps`), the last three. It refuses a sweep that fits no preset, or whose runs were set up differently (`analysis.run_config`, policies, seeds;
-how the runs are looped over may differ) from the committed runs, or that is not longer than them.
+Per sweep (`sweeps`), the last three. It refuses a sweep that fits no preset, whose runs were set
+up differently (`analysis.run_config`; how the runs are looped over may differ) from the committed
+runs, that has a policy or seed they lack, or that is not longer than them.
 """
 
 from __future__ import annotations
@@ -89,9 +94,12 @@ def _same_setup(long, short) -> None:
     if dataclasses.replace(long_cfg, runs_loop=short_cfg.runs_loop) != short_cfg:
         raise ValueError(f"{long.path} ran other settings than the committed runs {short.name}; "
                          "compare it with runs of its own settings")
-    key = lambda s: sorted((r.policy, r.seed, r.eps, r.temperature, r.ucb_c) for r in s.runs)  # noqa: E731
-    if key(long) != key(short):
-        raise ValueError(f"{long.path} has other runs (policies, seeds) than the committed runs {short.name}")
+    key = lambda s: {(r.policy, r.seed, r.eps, r.temperature, r.ucb_c) for r in s.runs}  # noqa: E731
+    extra = sorted(key(long) - key(short))
+    if extra:
+        runs = ", ".join(f"{policy} seed {seed}" for policy, seed, *_ in extra)
+        raise ValueError(f"{long.path} has runs the committed runs {short.name} lack ({runs}); compare runs "
+                         "of the committed policies and seeds")
     if long.steps_done <= short.steps_done:
         raise ValueError(f"{long.path} has {long.steps_done:,} steps done, no more than the committed runs' "
                          f"{short.steps_done:,}")
@@ -174,9 +182,46 @@ def evidence(longs: dict, committed: dict) -> dict:
     if missing:
         raise ValueError(f"no committed runs of {', '.join(missing)} to compare with")
     claims = an.claims_table(longs)
-    return {"claims": [{"claim": r[0], "text": r[1], "statistic": r[3], "verdict": r[4]}
+    presets = sorted(longs)
+    return {"claims": [{"claim": r[0], "text": r[1], "statistic": r[3], "verdict": r[4], "presets": presets}
                        for r in claims.rows if not r[4].startswith("not testable")],
-            "sweeps": [sweep_evidence(p, longs[p], committed[p]) for p in sorted(longs)]}
+            "sweeps": [sweep_evidence(p, longs[p], committed[p]) for p in presets]}
+
+
+def _claim_order(claim: str) -> tuple[int, str]:
+    """"6a" -> (6, "a"): the claims table's order."""
+    digits = claim[:len(claim) - len(claim.lstrip("0123456789"))]
+    return int(digits or 0), claim[len(digits):]
+
+
+def merged(old: dict | None, new: dict) -> dict:
+    """`new` (`evidence`) with what `old` (the file as it was) holds of other presets: its sweeps of
+    presets `new` does not measure, and its claims computed from none of `new`'s presets (a claim
+    computed from a preset measured anew is computed anew, or dropped with its sweep). Rows of a
+    file written before they recorded their presets came from all of that file's sweeps. Claims
+    in the claims table's order, a claim's rows in the order of their presets; sweeps by preset."""
+    if not old:
+        return new
+    fresh = {x["preset"] for x in new["sweeps"]}
+    before = sorted(x["preset"] for x in old["sweeps"])
+    kept = [{**r, "presets": r.get("presets", before)} for r in old["claims"]]
+    claims = [r for r in kept if not fresh & set(r["presets"])] + new["claims"]
+    sweeps = [x for x in old["sweeps"] if x["preset"] not in fresh] + new["sweeps"]
+    return {"claims": sorted(claims, key=lambda r: (_claim_order(r["claim"]), r["presets"])),
+            "sweeps": sorted(sweeps, key=lambda x: x["preset"])}
+
+
+def _read(path: pathlib.Path) -> dict | None:
+    """The full-length JSON as it is, to add to (`merged`); None where there is none yet."""
+    if not path.exists():
+        return None
+    try:
+        old = json.loads(path.read_text())
+    except ValueError as err:
+        raise ValueError(f"{path} is not JSON ({err}); move it aside to write a new one") from err
+    if not isinstance(old, dict) or not {"claims", "sweeps"} <= set(old):
+        raise ValueError(f"{path} has no claims and sweeps; move it aside to write a new one")
+    return old
 
 
 def main(argv: list[str]) -> int:
@@ -200,12 +245,15 @@ def main(argv: list[str]) -> int:
         if lost:
             raise ValueError(f"{', '.join(lost)}: fits no preset, or one another sweep given already stands for")
         entry = evidence(longs, results.load_presets())
+        old = _read(OUT)
     except (an.SweepError, ValueError) as err:
         print(f"full_length_evidence.py: {err}", file=sys.stderr)
         return 2
+    entry = merged(old, entry)
     OUT.parent.mkdir(parents=True, exist_ok=True)
     OUT.write_text(json.dumps(entry, indent=1, allow_nan=False) + "\n")
-    print(f"wrote {OUT}\n")
+    kept = [f"`{x['sweep']}` ({x['preset']})" for x in entry["sweeps"] if x["preset"] not in longs]
+    print(f"wrote {OUT}" + (f", keeping {', '.join(kept)}" if kept else "") + "\n")
     print(results.full_length_block(OUT))
     return 0
 

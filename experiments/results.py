@@ -479,7 +479,7 @@ def _full_length_sweep(e: dict) -> list[str]:
     name = e["preset"]
     lines = [f"`{e['sweep']}` ({name}): {e['runs']} runs × {e['steps']:,} steps on {_device(e['device'])}, beside the "
              f"committed runs `{c['sweep']}` ({c['runs']} runs × {c['steps']:,} steps on {_device(c['devices'])}).", "",
-             f"The same settings and seeds on the two platforms, over the steps both ran: curiosity, the VAE loss "
+             f"{_same_runs(e)} on the two platforms, over the steps both ran: curiosity, the VAE loss "
              f"per image and its reconstruction term over steps {a:,}-{b:,}, object contacts per 1,000 agent-steps "
              f"over 0-{b:,}; means over seeds, Welch's two-sided t-test, and Holm's correction over the table's "
              f"{n} tests:", "",
@@ -502,6 +502,18 @@ def _full_length_sweep(e: dict) -> list[str]:
              f"contact steps rather than normalised; the {e['runs']} runs of {e['steps']:,} steps (solid) and the "
              f"committed runs of {c['steps']:,} (dashed).*"]
     return lines
+
+
+def _same_runs(e: dict) -> str:
+    """What a full-length sweep's runs have in common with the committed ones they are set beside:
+    the same seeds, or (a sweep of fewer) the same settings, with the seeds each side has."""
+    cv = e["curves"]
+    long = {label: len(idx) for label, idx in cv["groups"].items()}
+    short = {label: len(cv["short"]["groups"][label]) for label in long}
+    if long == short:
+        return "The same settings and seeds"
+    return "The same settings (" + "; ".join(f"{label}: {long[label]} against {short[label]} seeds"
+                                              for label in long) + ")"
 
 
 def _agent_contact_order_row(e: dict) -> list[str]:
@@ -553,9 +565,10 @@ def paper_numbers_block(presets: dict, path: pathlib.Path = FULL_LENGTH) -> str:
     md = an.paper_numbers_table(presets, long, label or "80,000 steps", label="the committed runs").to_markdown()
     return md + (f"\n![{PAPER_READINGS}](figures/results/{PAPER_READINGS}.png)\n\n*The curiosity of the paper's "
                  "figs. 8, 17, 18 and 20 beside what the paper says of them: the mean over runs of each run's curiosity "
-                 "(the mean of its agents) in bins of 1,000 steps, with its 95 % CI, for the committed runs and, "
-                 "with two agents, the full-length runs on the GPU; grey boxes: the paper's words (\"about 0.55\" "
-                 "around step 5,000), over the steps it puts them at.*\n")
+                 f"(the mean of its agents) in bins of 1,000 steps, with its 95 % CI, for the committed runs"
+                 + (f" and the full-length runs ({label})" if label else "")
+                 + "; grey boxes: the paper's words (\"about 0.55\" around step 5,000), over the steps it puts "
+                 "them at.*\n")
 
 
 def paper_readings_figure(presets: dict, path: pathlib.Path = FULL_LENGTH, out: pathlib.Path = FIGURES) -> None:

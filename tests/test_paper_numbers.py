@@ -85,6 +85,12 @@ def test_the_table_on_planted_sweeps_and_full_length_curves():
     assert rows["fig. 8", "curiosity, steps 0-1,000"][5] == "—"  # no one-agent run of that length
     assert rows["fig. 21", "% of the run's object contacts made by step 40,000"][5] == "50 % [50, 50]"
     assert t.values[0]["ours"] == pytest.approx(0.4) and t.values[0]["ours_long"] is None
+    # Full-length runs of one policy (fig. 8's ε-greedy alone): its readings, but no share of UCB's.
+    t = an.paper_numbers_table({"single_agent": single, "multi_agent": multi},
+                               {"single_agent": (cv, {"eps": [0, 1, 2]}), "multi_agent": (cv, {"eps": [0, 1, 2]})})
+    rows = {(r[0], r[2]): r for r in t.rows}
+    assert rows["fig. 8", "curiosity, steps 0-1,000"][5] == "0.6 [0.6, 0.6]"
+    assert rows["fig. 21", "object contacts, % of UCB's"][5] == "—"
 
 
 def test_plot_paper_readings_draws_each_source_and_the_papers_boxes():

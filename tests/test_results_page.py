@@ -408,7 +408,7 @@ def test_the_committed_full_length_numbers_are_what_their_runs_give(results):
 
 
 def _check_full_length_sweep(e: dict, stats):
-    assert e["steps"] > e["committed"]["steps"] and e["runs"] == e["committed"]["runs"]
+    assert e["steps"] > e["committed"]["steps"] and e["runs"] <= e["committed"]["runs"]
     for rows, test, a, b in (("platforms", stats.ttest_ind, "long", "short"), ("halves", stats.ttest_rel, "second", "first")):
         ps = []
         for r in e[rows]:
@@ -472,6 +472,55 @@ def test_full_length_evidence_on_the_tiny_sweep(results, tiny_sweep, tiny_single
     with pytest.raises(ValueError, match="no more than"):
         module.sweep_evidence("multi_agent", short, long)
     assert results.full_length_block(tmp_path / "missing.json").startswith("No sweep of the paper's full length")
+
+
+def test_full_length_evidence_sets_fewer_runs_beside_all_the_committed_ones(results, tiny_sweep, tmp_path, monkeypatch):
+    """A full-length sweep of some of the committed policies and seeds (on a CPU, fig. 8's
+    ε-greedy runs alone) is compared with every committed run of its settings; one with a run the
+    committed ones lack is refused."""
+    module = _full_length_module()
+    monkeypatch.setattr(module, "LATE_STEPS", 40)
+    monkeypatch.setattr(module, "BIN_STEPS", 40)
+    whole = an.load(tiny_sweep)
+    eps, ucb = whole.select(policy="eps"), whole.select(policy="ucb")
+    long = an.load(_subset_sweep(tiny_sweep, tmp_path / "some", [*eps, ucb[0]]))
+    short = an.load(_copy_sweep(tiny_sweep, tmp_path / "first_half", windows_done=whole.n_windows // 2))
+    e = module.evidence({"multi_agent": long}, {"multi_agent": short})["sweeps"][0]
+    assert e["runs"] == len(eps) + 1 and e["committed"]["runs"] == whole.n_runs
+    by_group = {r["group"]: r for r in e["platforms"] if r["measure"] == "curiosity"}
+    assert sorted(by_group) == sorted(g.label for g in long.groups())
+    ucb_label = long.groups("ucb")[0].label
+    assert len(by_group[ucb_label]["long"]) == 1 and len(by_group[ucb_label]["short"]) == len(ucb)
+    eps_label = long.groups("eps")[0].label
+    assert by_group[eps_label]["long"] == by_group[eps_label]["short"]  # the same runs over the same steps
+    assert results._same_runs(e) == f"The same settings ({eps_label}: {len(eps)} against {len(eps)} seeds; " \
+                                    f"{ucb_label}: 1 against {len(ucb)} seeds)"
+    all_but_one = [i for i in range(whole.n_runs) if i != ucb[1]]
+    with pytest.raises(ValueError, match=r"has runs the committed runs .* lack \(ucb seed 1\)"):
+        module.sweep_evidence("multi_agent", an.load(_copy_sweep(tiny_sweep, tmp_path / "all")),
+                              an.load(_subset_sweep(tiny_sweep, tmp_path / "fewer", all_but_one, windows_done=1)))
+
+
+def test_full_length_evidence_keeps_what_the_file_holds_of_other_presets():
+    module = _full_length_module()
+    sweep = lambda preset: {"preset": preset, "sweep": preset}  # noqa: E731
+    row = lambda claim, *presets: {"claim": claim, "verdict": claim + "".join(presets), **(  # noqa: E731
+        {"presets": list(presets)} if presets else {})}
+    assert module.merged(None, {"claims": [], "sweeps": []}) == {"claims": [], "sweeps": []}
+    # A file written before its rows named their presets: they came from its one sweep.
+    old = {"claims": [row("1"), row("15"), row("6a")], "sweeps": [sweep("multi_agent")]}
+    new = {"claims": [row("1", "single_agent"), row("13", "single_agent")], "sweeps": [sweep("single_agent")]}
+    both = module.merged(old, new)
+    assert [(r["claim"], r["presets"]) for r in both["claims"]] == [
+        ("1", ["multi_agent"]), ("1", ["single_agent"]), ("6a", ["multi_agent"]), ("13", ["single_agent"]),
+        ("15", ["multi_agent"])]
+    assert [x["preset"] for x in both["sweeps"]] == ["multi_agent", "single_agent"]
+    # Measured anew, a preset's sweep and every row computed from it are replaced.
+    again = module.merged(both, {"claims": [row("2", "multi_agent")], "sweeps": [{**sweep("multi_agent"), "new": 1}]})
+    assert [(r["claim"], r["presets"]) for r in again["claims"]] == [
+        ("1", ["single_agent"]), ("2", ["multi_agent"]), ("13", ["single_agent"])]
+    assert [x.get("new") for x in again["sweeps"]] == [1, None]
+    assert module.merged({"claims": [row("3", "multi_agent", "single_agent")], "sweeps": []}, new)["claims"] == new["claims"]
 
 
 def test_contact_timing_of_a_full_length_sweep_from_planted_cumulative_curves(results):
@@ -555,6 +604,19 @@ def _copy_sweep(src: pathlib.Path, dst: pathlib.Path, windows_done: int | None =
         p = json.loads((dst / "progress.json").read_text())
         p["windows_done"] = windows_done
         (dst / "progress.json").write_text(json.dumps(p))
+    return dst
+
+
+def _subset_sweep(src: pathlib.Path, dst: pathlib.Path, keep: list[int], windows_done: int | None = None) -> pathlib.Path:
+    """`_copy_sweep` of the runs `keep` (indices of `src`'s runs axis) alone, as if a sweep had
+    run only those."""
+    _copy_sweep(src, dst, windows_done)
+    manifest = json.loads((dst / "manifest.json").read_text())
+    manifest["runs"] = [{**manifest["runs"][i], "index": k} for k, i in enumerate(keep)]
+    (dst / "manifest.json").write_text(json.dumps(manifest))
+    for f in (dst / "metrics").glob("*.npy"):
+        if f.name != "steps.npy":
+            np.save(f, np.load(f)[keep])
     return dst
 
 

@@ -197,10 +197,10 @@ MEASURES = {"level": _level, "end": _end, "lowest": _lowest, "lowest_step": _low
 def reading_value(reading: Reading, curves: Mapping, groups: Mapping[str, list]):
     """`reading` measured on `curves` (`run_curves`, or a full-length JSON's) whose runs of each
     policy are `groups` ({policy: run indices}): (cell text, number), or None where the runs are
-    too short for it or lack the policy."""
-    if reading.policy not in groups or "ucb" not in groups:
+    too short for it or lack the policy (or UCB, for a share of UCB's)."""
+    if reading.policy not in groups or (reading.measure == "share_of_ucb" and "ucb" not in groups):
         return None
-    return MEASURES[reading.measure](curves, list(groups[reading.policy]), list(groups["ucb"]), *reading.args)
+    return MEASURES[reading.measure](curves, list(groups[reading.policy]), list(groups.get("ucb", [])), *reading.args)
 
 
 def paper_numbers_table(sweeps, full_length: Mapping[str, tuple[Mapping, Mapping]] | None = None,
