@@ -1,6 +1,6 @@
 """The paper's experiments at their full length: 80,000 steps, where the committed runs stop at 40,000.
 
-    python experiments/full_length_evidence.py runs/h200/main [runs/paper/single_agent_80k ...]
+    python experiments/full_length_evidence.py runs/h200/main [runs/paper/single_agent.full_length ...]
 
 The main job (`python -m mjx_curio.sweep policies=eps,boltzmann,ucb seeds=8`: two agents, the
 three policies, 8 seeds a policy, the paper's 80,000 steps) takes about a day on a 2-core CPU, so
@@ -8,7 +8,7 @@ the committed runs (experiments/results/) stop at 40,000 steps. A GPU runs the w
 minutes (docs/cost_model.md). Such sweeps' metrics, about 25 MB each, are not committed; this
 script reduces them to what the results page shows and writes docs/results/full_length.json. Each
 sweep given stands for the preset whose settings it has (`analysis.assign_presets`: the main job
-is `multi_agent`) and is compared with that preset's committed runs of the same settings, all
+is `multi_agent`; a sweep named `<preset>.<label>` stands for <preset>) and is compared with that preset's committed runs of the same settings, all
 their seeds (a full-length sweep may run some of the preset's policies and seeds: on a CPU, one
 agent's ε-greedy runs, fig. 8's setting, take hours where all of its runs take days). The file
 keeps what it holds of presets not given this time, so that sweeps measured on different
@@ -211,6 +211,19 @@ def merged(old: dict | None, new: dict) -> dict:
             "sweeps": sorted(sweeps, key=lambda x: x["preset"])}
 
 
+def stands_for(assigned: dict) -> dict:
+    """{preset: sweep} from `analysis.assign_presets`'s answer: a sweep named `<preset>.<label>`
+    (`runs/paper/single_agent.full_length`), which the page keeps apart from its preset, is here
+    the preset at its full length. ValueError where two sweeps would stand for one preset."""
+    out = {}
+    for key, sweep in assigned.items():
+        preset = key.partition(".")[0]
+        if preset in out:
+            raise ValueError(f"{out[preset].name} and {sweep.name} both stand for {preset}; give one of them")
+        out[preset] = sweep
+    return out
+
+
 def _read(path: pathlib.Path) -> dict | None:
     """The full-length JSON as it is, to add to (`merged`); None where there is none yet."""
     if not path.exists():
@@ -240,7 +253,7 @@ def main(argv: list[str]) -> int:
         return 2
     try:
         sweeps = [an.load(a) for a in argv]
-        longs = an.assign_presets(sweeps)
+        longs = stands_for(an.assign_presets(sweeps))
         lost = [s.name for s in sweeps if not any(s is x or s in getattr(x, "parts", ()) for x in longs.values())]
         if lost:
             raise ValueError(f"{', '.join(lost)}: fits no preset, or one another sweep given already stands for")

@@ -11,6 +11,7 @@ import pathlib
 import re
 import shutil
 import sys
+import types
 
 import numpy as np
 import pytest
@@ -588,6 +589,14 @@ def test_full_length_evidence_refuses_bad_command_lines(tiny_sweep, tmp_path, ca
     assert module.main([str(tiny_sweep), str(twin)]) == 2
     assert "twin: fits no preset, or one another sweep given already stands for" in capsys.readouterr().err
     assert not (tmp_path / "out").exists()
+
+
+def test_a_side_experiment_stands_for_its_preset_at_the_full_length():
+    module = _full_length_module()
+    s, t = types.SimpleNamespace(name="a"), types.SimpleNamespace(name="b")
+    assert module.stands_for({"multi_agent.full_length": s, "single_agent": t}) == {"multi_agent": s, "single_agent": t}
+    with pytest.raises(ValueError, match="both stand for multi_agent"):
+        module.stands_for({"multi_agent": s, "multi_agent.full_length": t})
 
 
 # ---------------------------------------------------------------------- snapshots of tiny sweeps
