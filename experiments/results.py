@@ -447,9 +447,8 @@ def full_length_block(path: pathlib.Path = FULL_LENGTH) -> str:
     e = json.loads(path.read_text())
     names = ", ".join(f"`{x['sweep']}` ({x['preset']}, {x['steps']:,} steps)" for x in e["sweeps"])
     several = len(e["sweeps"]) > 1
-    lines = [f"The claims that the full-length sweep{'s' if several else ''} {names} can test by "
-             f"{'themselves' if several else 'itself'} (the claims table above has them at the committed runs' "
-             "length):", "",
+    lines = [f"The claims that {'each of ' if several else ''}the full-length sweep{'s' if several else ''} {names} "
+             "can test by itself (the claims table above has them at the committed runs' length):", "",
              "| # | claim | our statistic | verdict |", "|---|---|---|---|"]
     lines += [f"| {r['claim']} | {r['text']} | {r['statistic']} | {r['verdict']} |" for r in e["claims"]]
     if not any(r["claim"] == "15" for r in e["claims"]):
@@ -479,7 +478,7 @@ def _full_length_sweep(e: dict) -> list[str]:
     name = e["preset"]
     lines = [f"`{e['sweep']}` ({name}): {e['runs']} runs × {e['steps']:,} steps on {_device(e['device'])}, beside the "
              f"committed runs `{c['sweep']}` ({c['runs']} runs × {c['steps']:,} steps on {_device(c['devices'])}).", "",
-             f"{_same_runs(e)} on the two platforms, over the steps both ran: curiosity, the VAE loss "
+             f"{_same_runs(e)} in the two sets of runs, over the steps both ran: curiosity, the VAE loss "
              f"per image and its reconstruction term over steps {a:,}-{b:,}, object contacts per 1,000 agent-steps "
              f"over 0-{b:,}; means over seeds, Welch's two-sided t-test, and Holm's correction over the table's "
              f"{n} tests:", "",
@@ -492,15 +491,19 @@ def _full_length_sweep(e: dict) -> list[str]:
              "| p (Holm) |", "|---|---|---|---|---|---|---|", *rows(e["halves"], "first", "second"), "",
              *_contact_timing(e),
              f"![full_length_{name}_curiosity](figures/results/full_length_{name}_curiosity.png)", "",
-             f"*Curiosity (the mean of the agents) in bins of {e['curves']['bin_steps']:,} steps, mean over seeds "
+             f"*Curiosity{' (the mean of the agents)' if e['agents'] > 1 else ''} in bins of "
+             f"{e['curves']['bin_steps']:,} steps, mean over seeds "
              f"with its 95 % CI: the {e['runs']} runs of {e['steps']:,} steps (solid) and the committed runs of "
              f"{c['steps']:,} (dashed).*", "",
              f"![full_length_{name}_interactions](figures/results/full_length_{name}_interactions.png)", "",
-             "*Contact steps summed from the start, agent-object (both agents)"
-             + (" and agent-agent" if e["agents"] > 1 else "")
-             + ", mean over seeds with its 95 % CI, per policy: the paper's figs. 21 and 22 at their full length, in "
-             f"contact steps rather than normalised; the {e['runs']} runs of {e['steps']:,} steps (solid) and the "
-             f"committed runs of {c['steps']:,} (dashed).*"]
+             "*Contact steps summed from the start, "
+             + ("agent-object (both agents) and agent-agent, mean over seeds with its 95 % CI, per policy: the "
+                "paper's figs. 21 and 22 at their full length, in contact steps rather than normalised"
+                if e["agents"] > 1 else
+                "agent-object (all four objects), mean over seeds with its 95 % CI, per policy: the paper's fig. 9 "
+                "at its full length, summed over the objects")
+             + f"; the {e['runs']} runs of {e['steps']:,} steps (solid) and the committed runs of {c['steps']:,} "
+             "(dashed).*"]
     return lines
 
 

@@ -361,7 +361,7 @@ def test_reconstruction_evidence_policies_and_paired_test_on_planted_numbers(tin
     assert math.isnan(module.paired(np.ones(3), np.ones(3))["p"])  # no spread, no test
 
 
-# ------------------------------------------------------------------- the main job at its full length
+# ------------------------------------------------------------- the paper's experiments at their full length
 
 
 def _full_length_module():

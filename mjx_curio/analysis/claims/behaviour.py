@@ -111,7 +111,7 @@ def claim_boltzmann_agents_meet(presets: Mapping[str, Sweep]) -> ClaimResult:
     (`stats.agent_contacts`), one group per policy (`agent_contact_order`). Welch t Boltzmann -
     ε-greedy. Verdict: holds if Boltzmann's are higher with p < 0.05. Scale: runs of >=
     AGENT_PHASE_STEPS steps (the phase the paper's Boltzmann contacts come from begins at ~55,000;
-    the full-length runs on the GPU test it, "The main job at its full length" on the results
+    the full-length runs on the GPU test it, "At the paper's full length" on the results
     page), >= MIN_SEEDS seeds a policy. Below that scale the statistic is shown and its test is
     left out of the power table: the seeds a 40,000-step comparison would need say nothing about a
     phase the runs did not reach.
