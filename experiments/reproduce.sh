@@ -134,6 +134,11 @@
 # stepping over 3 sessions on the Intel Xeon @ 2.80GHz, 8-9.8 run-steps/s alone), not run by this
 # script:
 #     python -m mjx_curio.sweep preset=multi_agent policies=eps seeds=4 steps=40000 vae_layers=authors checkpoint_every=1000 out=runs/paper/multi_agent.authors_vae
+# One agent under epsilon-greedy at the paper's full 80,000 steps (figs. 8-10's setting), seeds
+# 0-2, 2 h 1 min alone on a 2-core AMD EPYC (CPU family 25 model 17, 33-34 run-steps/s), not run by
+# this script; full_length_evidence.py sets it beside the committed single_agent runs:
+#     python -m mjx_curio.sweep preset=single_agent policies=eps seeds=3 steps=80000 checkpoint_every=2000 out=runs/paper/single_agent.full_length
+#     python experiments/full_length_evidence.py runs/paper/single_agent.full_length
 #
 # The paper's full scale (8 seeds, 80,000 steps, every preset) is a GPU job: install the CUDA
 # extra (pip install -e '.[cuda]') and run

@@ -650,7 +650,8 @@ def full_length_figure(path: pathlib.Path = FULL_LENGTH, out: pathlib.Path = FIG
         groups = list(cv["groups"])
         sides = (("long", cv["groups"], "-", _device(e["device"])),
                  ("short", cv["short"]["groups"], "--", _device(e["committed"]["devices"])))
-        fig, axes = plt.subplots(1, len(groups), figsize=(4.0 * len(groups), 3.2), sharey=True, squeeze=False)
+        # at least 7 inches: the legend names the committed runs' CPUs
+        fig, axes = plt.subplots(1, len(groups), figsize=(max(4.0 * len(groups), 7.0), 3.2), sharey=True, squeeze=False)
         for ax, label in zip(axes[0], groups):
             for side, groups_of, style, dev in sides:
                 band(ax, cv[side], groups_of[label], "runs", style, label=f"{dev}, {len(groups_of[label])} seeds")
