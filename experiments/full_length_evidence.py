@@ -257,8 +257,8 @@ def main(argv: list[str]) -> int:
         lost = [s.name for s in sweeps if not any(s is x or s in getattr(x, "parts", ()) for x in longs.values())]
         if lost:
             raise ValueError(f"{', '.join(lost)}: fits no preset, or one another sweep given already stands for")
+        old = _read(OUT)  # a damaged file stops the script before the sweeps are reduced
         entry = evidence(longs, results.load_presets())
-        old = _read(OUT)
     except (an.SweepError, ValueError) as err:
         print(f"full_length_evidence.py: {err}", file=sys.stderr)
         return 2

@@ -589,6 +589,15 @@ def test_full_length_evidence_refuses_bad_command_lines(tiny_sweep, tmp_path, ca
     assert module.main([str(tiny_sweep), str(twin)]) == 2
     assert "twin: fits no preset, or one another sweep given already stands for" in capsys.readouterr().err
     assert not (tmp_path / "out").exists()
+    # A damaged full_length.json is named and left as it is.
+    bad = tmp_path / "out" / "full_length.json"
+    bad.parent.mkdir()
+    for text, says in (("{not json", "is not JSON"), ("[]", "has no claims and sweeps")):
+        bad.write_text(text)
+        assert module.main([str(tiny_sweep)]) == 2
+        err = capsys.readouterr().err
+        assert f"{bad}" in err and says in err and "move it aside" in err
+        assert bad.read_text() == text
 
 
 def test_a_side_experiment_stands_for_its_preset_at_the_full_length():
