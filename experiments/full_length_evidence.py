@@ -5,12 +5,13 @@
 The main job (`python -m mjx_curio.sweep policies=eps,boltzmann,ucb seeds=8`: two agents, the
 three policies, 8 seeds a policy, the paper's 80,000 steps) takes about a day on a 2-core CPU, so
 the committed runs (experiments/results/) stop at 40,000 steps. A GPU runs the whole job in
-minutes (docs/cost_model.md). Such sweeps' metrics, about 25 MB each, are not committed; this
-script reduces them to what the results page shows and writes docs/results/full_length.json. Each
-sweep given stands for the preset whose settings it has (`analysis.assign_presets`: the main job
-is `multi_agent`; a sweep named `<preset>.<label>` stands for <preset>) and is compared with that preset's committed runs of the same settings, all
-their seeds (a full-length sweep may run some of the preset's policies and seeds: on a CPU, one
-agent's ε-greedy runs, fig. 8's setting, take hours where all of its runs take days). The file
+minutes (docs/cost_model.md). Such sweeps' metrics (the main job's about 25 MB) are not
+committed; this script reduces them to what the results page shows and writes
+docs/results/full_length.json. Each sweep given stands for the preset whose settings it has
+(`analysis.assign_presets`: the main job is `multi_agent`; a sweep named `<preset>.<label>` stands
+for <preset>) and is compared with that preset's committed runs of the same settings, all their
+seeds (a full-length sweep may run some of the preset's policies and seeds: on a CPU, one agent's
+ε-greedy runs, fig. 8's setting, take hours where all of its runs take a day). The file
 keeps what it holds of presets not given this time, so that sweeps measured on different
 machines, or in different sessions, stand side by side:
 
