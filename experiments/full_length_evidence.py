@@ -11,7 +11,8 @@ docs/results/full_length.json. Each sweep given stands for the preset whose sett
 (`analysis.assign_presets`: the main job is `multi_agent`; a sweep named `<preset>.<label>` stands
 for <preset>) and is compared with that preset's committed runs of the same settings, all their
 seeds (a full-length sweep may run some of the preset's policies and seeds: on a CPU, one agent's
-ε-greedy runs, fig. 8's setting, take hours where all of its runs take a day). The file
+ε-greedy runs, fig. 8's setting, take hours where all of its runs take a day; sweeps of one
+preset's different policies stand for it together, `stands_for`). The file
 keeps what it holds of presets not given this time, so that sweeps measured on different
 machines, or in different sessions, stand side by side:
 
@@ -29,11 +30,15 @@ machines, or in different sessions, stand side by side:
   paper's run length changes;
 - `curves`: each run's curiosity (the mean of its agents) in bins of 1,000 steps, and its contacts
   with objects and between the agents summed from the start, for both sets of runs, from which
-  `results.py page` draws the figures.
+  `results.py page` draws the figures;
+- `agents`: where the file holds a one-agent and a two-agent sweep of the same length, the two
+  set against each other over their last 10,000 steps (`one_against_two`), claim 3 at the full
+  length, whose row joins the claims.
 
-Per sweep (`sweeps`), the last three. It refuses a sweep that fits no preset, whose runs were set
-up differently (`analysis.run_config`; how the runs are looped over may differ) from the committed
-runs, that has a policy or seed they lack, or that is not longer than them.
+Per sweep (`sweeps`), `platforms`, `halves` and `curves`. It refuses a sweep that fits no
+preset, whose runs were set up differently (`analysis.run_config`; how the runs are looped over
+may differ) from the committed runs, that has a policy or seed they lack, or that is not longer
+than them.
 """
 
 from __future__ import annotations
@@ -141,6 +146,9 @@ def sweep_evidence(preset: str, long, short) -> dict:
 
     _same_setup(long, short)
     end, full = short.steps_done, long.steps_done
+    parts = long.parts or (long,)
+    devices = list({json.dumps(p.manifest.get("device", {}), sort_keys=True): p.manifest.get("device", {})
+                    for p in parts}.values())
     at_end = walls_measures(long, end, LATE_STEPS)
     committed = walls_measures(short, end, LATE_STEPS)
     first, second = late_measures(long, end), late_measures(long, full)
@@ -159,8 +167,9 @@ def sweep_evidence(preset: str, long, short) -> dict:
         for row, q in zip(rows, holm([r["p"] for r in rows])):
             row["p_holm"] = q
     return {
-        "preset": preset, "sweep": str(long.path.name), "command": long.manifest.get("command", ""),
-        "device": long.manifest.get("device", {}), "versions": long.manifest.get("versions", {}),
+        # a sweep merged from parts (`stands_for`): each part's command, and its machines, once each
+        "preset": preset, "sweep": long.name, "command": " && ".join(p.manifest.get("command", "") for p in parts),
+        "device": devices[0] if len(devices) == 1 else devices, "versions": long.manifest.get("versions", {}),
         "steps": full, "runs": len(long.runs), "agents": long.n_agents,
         # a merged sweep's parts may have run on different machines
         "committed": {"sweep": short.name, "steps": end, "runs": len(short.runs),
@@ -212,17 +221,98 @@ def merged(old: dict | None, new: dict) -> dict:
             "sweeps": sorted(sweeps, key=lambda x: x["preset"])}
 
 
+AGENT_MEASURES = ("curiosity", "vae_loss", "recon")  # claim 3's two, and the loss's reconstruction term
+ONE, TWO = "single_agent", "multi_agent"
+
+
+def one_against_two(sweeps: list) -> dict | None:
+    """Claim 3 (two agents have higher curiosity and a higher VAE loss than one) at the full length,
+    from the file's entries (`sweep_evidence`) of single_agent and multi_agent; None where one is
+    missing or they differ in length. The committed claim compares the second half of the steps
+    both sweeps ran; the file keeps, per run, the measures over the last LATE_STEPS (`halves`, a
+    sweep's own numbers whatever else the file holds), so the comparison is over those: per
+    policy both ran, the late curiosity, the VAE loss per image and its reconstruction term, two
+    agents against one, Welch's two-sided t-test and Holm's correction over the table's tests.
+    The verdict, as claim 3's: the UCB runs (the paper's choice), both curiosity and the VAE loss
+    higher with two agents at p < 0.05 (no claim row where either side lacks UCB runs). The two
+    entries may come from different machines: their `platforms` tables say how far that alone
+    moves the same measures.
+
+    {"one", "two": the sweeps' names, "steps", "late_steps", "rows": [{"group", "measure", "what",
+    "one", "two" (per run), "diff" (two - one), "t", "p", "p_holm"}], "claim": the claims-table
+    row, or None}."""
+    from mjx_curio import analysis as an
+    from mjx_curio.analysis.claims import claim_two_agents_higher
+    from mjx_curio.analysis.claims.common import ALPHA, _ci, _decide, _f, _p
+
+    by = {x["preset"]: x for x in sweeps}
+    one, two = by.get(ONE), by.get(TWO)
+    if one is None or two is None or one["steps"] != two["steps"] or one["late_steps"] != two["late_steps"]:
+        return None
+    late = lambda e: {(h["group"], h["measure"]): h for h in e["halves"]}  # noqa: E731
+    a, b = late(one), late(two)
+    groups = [g for g in dict.fromkeys(h["group"] for h in one["halves"]) if any(k[0] == g for k in b)]
+    rows = []
+    for g in groups:
+        for key in AGENT_MEASURES:
+            x, y = a[(g, key)], b[(g, key)]
+            t = an.welch_t(np.asarray(y["second"], float), np.asarray(x["second"], float))
+            rows.append({"group": g, "measure": key, "what": x["what"], "one": x["second"], "two": y["second"],
+                         "diff": _num(t["diff"]), "p": _num(t["p"]), "t": _num(t["t"])})
+    for row, q in zip(rows, holm([r["p"] for r in rows])):
+        row["p_holm"] = q
+    lo, hi = one["steps"] - one["late_steps"], one["steps"]
+    ucb = [r for r in rows if r["group"].startswith(an.POLICY_LABELS["ucb"]) and r["measure"] != "recon"]
+    result = claim_two_agents_higher({})  # its wording; with no sweep it tests nothing
+    parts, fails = [], []
+    for r in ucb:
+        what = "curiosity" if r["measure"] == "curiosity" else "VAE loss per image"
+        ms, mm = (an.mean_ci(np.asarray(v, float)) for v in (r["one"], r["two"]))
+        parts.append(f"{what}: one agent {_ci(ms)}, two agents {_ci(mm)}, Welch t={_f(_nan(r['t']))}, "
+                     f"p={_p(_nan(r['p']))}")
+        if not (r["p"] is not None and r["p"] < ALPHA and r["diff"] > 0):
+            fails.append(f"{what} not significantly higher with two agents")
+    stat = (f"mean over steps {lo:,}-{hi:,} of each run (the last {one['late_steps']:,} steps, which "
+            f"full_length.json keeps of every run), {one['sweep']} vs {two['sweep']}: " + "; ".join(parts))
+    claim = {"claim": result.key, "text": result.claim, "statistic": stat, "presets": [TWO, ONE],
+             "verdict": _decide([], fails, "both Welch tests p < 0.05, multi > single")}
+    return {"one": one["sweep"], "two": two["sweep"], "steps": hi, "late_steps": one["late_steps"], "rows": rows,
+            "claim": claim if ucb else None}  # without UCB runs on both sides, the claim is not tested
+
+
+def _nan(v) -> float:
+    """A JSON number back as a float, NaN for None."""
+    return math.nan if v is None else float(v)
+
+
+def with_one_against_two(doc: dict) -> dict:
+    """`doc` (`merged`) with `one_against_two` of its sweeps: the `agents` table, and claim 3's row
+    among the claims in place of one computed before from the same two presets."""
+    both = sorted([ONE, TWO])
+    claims = [r for r in doc["claims"] if not (r["claim"] == "3" and sorted(r.get("presets", [])) == both)]
+    out = {k: v for k, v in doc.items() if k != "agents"}
+    cross = one_against_two(doc["sweeps"])
+    if cross is not None:
+        claims += [cross["claim"]] if cross["claim"] else []
+        out["agents"] = {k: v for k, v in cross.items() if k != "claim"}
+    out["claims"] = sorted(claims, key=lambda r: (_claim_order(r["claim"]), r["presets"]))
+    return out
+
+
 def stands_for(assigned: dict) -> dict:
     """{preset: sweep} from `analysis.assign_presets`'s answer: a sweep named `<preset>.<label>`
     (`runs/paper/single_agent.full_length`), which the page keeps apart from its preset, is here
-    the preset at its full length. ValueError where two sweeps would stand for one preset."""
-    out = {}
+    the preset at its full length. Several such sweeps of one preset, each of some of its policies
+    (`single_agent.full_length` of ε-greedy, `single_agent.full_length_ucb` of UCB), stand for it
+    as one (`analysis.merge_sweeps`; SweepError where they differ in more than their policies or
+    repeat a run)."""
+    from mjx_curio import analysis as an
+
+    parts: dict[str, list] = {}
     for key, sweep in assigned.items():
-        preset = key.partition(".")[0]
-        if preset in out:
-            raise ValueError(f"{out[preset].name} and {sweep.name} both stand for {preset}; give one of them")
-        out[preset] = sweep
-    return out
+        parts.setdefault(key.partition(".")[0], []).append(sweep)
+    return {preset: ps[0] if len(ps) == 1 else an.merge_sweeps(ps, differ=("policies",))
+            for preset, ps in parts.items()}
 
 
 def _read(path: pathlib.Path) -> dict | None:
@@ -263,7 +353,7 @@ def main(argv: list[str]) -> int:
     except (an.SweepError, ValueError) as err:
         print(f"full_length_evidence.py: {err}", file=sys.stderr)
         return 2
-    entry = merged(old, entry)
+    entry = with_one_against_two(merged(old, entry))
     OUT.parent.mkdir(parents=True, exist_ok=True)
     OUT.write_text(json.dumps(entry, indent=1, allow_nan=False) + "\n")
     kept = [f"`{x['sweep']}` ({x['preset']})" for x in entry["sweeps"] if x["preset"] not in longs]

@@ -447,15 +447,48 @@ def full_length_block(path: pathlib.Path = FULL_LENGTH) -> str:
     e = json.loads(path.read_text())
     names = ", ".join(f"`{x['sweep']}` ({x['preset']}, {x['steps']:,} steps)" for x in e["sweeps"])
     several = len(e["sweeps"]) > 1
+    together = (", and claim 3 the one-agent and the two-agent sweep together"
+                if any(len(r.get("presets", [])) > 1 for r in e["claims"]) else "")
     lines = [f"The claims that {'each of ' if several else ''}the full-length sweep{'s' if several else ''} {names} "
-             "can test by itself (the claims table above has them at the committed runs' length):", "",
+             f"can test by itself{together} (the claims table above has them at the committed runs' length):", "",
              "| # | claim | our statistic | verdict |", "|---|---|---|---|"]
     lines += [f"| {r['claim']} | {r['text']} | {r['statistic']} | {r['verdict']} |" for r in e["claims"]]
     if not any(r["claim"] == "15" for r in e["claims"]):
         lines += [row for x in e["sweeps"] for row in _agent_contact_order_row(x)]
     for x in e["sweeps"]:
         lines += ["", *_full_length_sweep(x)]
+    if "agents" in e:
+        lines += ["", *_one_against_two(e["agents"], {x["sweep"]: x for x in e["sweeps"]})]
     return "\n".join(lines) + "\n"
+
+
+def _one_against_two(a: dict, sweeps: dict) -> list[str]:
+    """The one-agent sweep against the two-agent one at the full length (`one_against_two` of
+    full_length_evidence.py): claim 3's measures over the last steps, per policy both ran."""
+    fmt = {"curiosity": ".3g", "vae_loss": ".1f", "recon": ".1f"}
+    one, two = sweeps[a["one"]], sweeps[a["two"]]
+    lo, hi = a["steps"] - a["late_steps"], a["steps"]
+    n = sum(r["p"] is not None for r in a["rows"])
+    rows = []
+    for r in a["rows"]:
+        f = fmt.get(r["measure"], ".3g")
+        d = f"{r['diff']:+{f}}" if r["diff"] is not None else "—"
+        rows.append(f"| {r['group']} | {r['what']} | {_mean(r['one']):{f}} ({len(r['one'])}) | "
+                    f"{_mean(r['two']):{f}} ({len(r['two'])}) | {d} | {_p(r['p'])} | {_p(r['p_holm'])} |")
+    same = one["device"] == two["device"]
+    return [f"One agent against two at the full length (claim 3, figs. 23 and 24): `{a['one']}` on "
+            f"{_device(one['device'])} against `{a['two']}` on {_device(two['device'])}, the curiosity, the VAE "
+            f"loss per image and its reconstruction term over steps {lo:,}-{hi:,}, per policy both ran (the claim's "
+            "verdict is on UCB's, the paper's choice); means over seeds (how many in brackets), the difference two "
+            f"agents minus one, Welch's two-sided t-test, and Holm's correction over the table's {n} tests"
+            + ("" if same else "; the two ran on different machines, and each sweep's first table above says "
+               "how far the machine alone moves these measures") + ":", "",
+            "| policy | measure | one agent | two agents | difference | p | p (Holm) |",
+            "|---|---|---|---|---|---|---|", *rows, "",
+            f"![{ONE_AGAINST_TWO}](figures/results/{ONE_AGAINST_TWO}.png)", "",
+            f"*Curiosity in bins of {one['curves']['bin_steps']:,} steps, mean over seeds with its 95 % CI: one agent "
+            f"(`{a['one']}`, solid) and two (`{a['two']}`, the mean of the agents, dashed), the paper's fig. 23 at "
+            "its full length; shaded, the steps the table compares.*"]
 
 
 def _full_length_sweep(e: dict) -> list[str]:
@@ -628,7 +661,8 @@ def _contact_timing(e: dict) -> list[str]:
 def full_length_figure(path: pathlib.Path = FULL_LENGTH, out: pathlib.Path = FIGURES) -> None:
     """Per sweep of full_length.json, docs/figures/results/full_length_<preset>_curiosity.png (a
     panel a policy) and full_length_<preset>_interactions.png (object contacts, and agent
-    contacts where there are two agents)."""
+    contacts where there are two agents); where it sets one agent against two, their curiosity
+    (`_one_against_two_figure`)."""
     if not path.exists():
         return
     import matplotlib
@@ -638,14 +672,8 @@ def full_length_figure(path: pathlib.Path = FULL_LENGTH, out: pathlib.Path = FIG
 
     from mjx_curio import analysis as an
 
-    def band(ax, curve, indices, key, style, colour=None, label=None):
-        y = np.asarray([curve[key][i] for i in indices], dtype=float)
-        mean, lo, hi, _ = an.mean_ci(y)
-        x = np.asarray(curve["steps"]) / 1000
-        line, = ax.plot(x, mean, style, color=colour, lw=1.2, label=label)
-        ax.fill_between(x, lo, hi, color=line.get_color(), alpha=0.2, lw=0)
-
-    for e in json.loads(path.read_text())["sweeps"]:
+    doc = json.loads(path.read_text())
+    for e in doc["sweeps"]:
         cv = e["curves"]
         groups = list(cv["groups"])
         sides = (("long", cv["groups"], "-", _device(e["device"])),
@@ -654,7 +682,7 @@ def full_length_figure(path: pathlib.Path = FULL_LENGTH, out: pathlib.Path = FIG
         fig, axes = plt.subplots(1, len(groups), figsize=(max(4.0 * len(groups), 7.0), 3.2), sharey=True, squeeze=False)
         for ax, label in zip(axes[0], groups):
             for side, groups_of, style, dev in sides:
-                band(ax, cv[side], groups_of[label], "runs", style, label=f"{dev}, {len(groups_of[label])} seeds")
+                _band(ax, cv[side], groups_of[label], "runs", style, label=f"{dev}, {len(groups_of[label])} seeds")
             ax.set_title(label, fontsize=9)
             ax.set_xlabel("agent step (thousands)")
             ax.legend(fontsize=7)
@@ -669,7 +697,7 @@ def full_length_figure(path: pathlib.Path = FULL_LENGTH, out: pathlib.Path = FIG
         for ax, (key, title) in zip(axes[0], kinds):
             for label in groups:
                 for side, groups_of, style, _ in sides:
-                    band(ax, cv[side], groups_of[label], key, style, colours[label], label if side == "long" else None)
+                    _band(ax, cv[side], groups_of[label], key, style, colours[label], label if side == "long" else None)
             ax.set_title(title, fontsize=9)
             ax.set_xlabel("agent step (thousands)")
         axes[0][0].set_ylabel("contact steps since the start")
@@ -677,6 +705,51 @@ def full_length_figure(path: pathlib.Path = FULL_LENGTH, out: pathlib.Path = FIG
         fig.tight_layout()
         an.save_figure(fig, out, f"full_length_{e['preset']}_interactions", dpi=DPI)
         plt.close(fig)
+    if "agents" in doc:
+        _one_against_two_figure(doc, out)
+
+
+def _band(ax, curve, indices, key, style, colour=None, label=None):
+    """A full-length curve's runs `indices` (`curve[key]`, one list a run, at `curve["steps"]`)
+    as their mean and its 95 % CI."""
+    from mjx_curio import analysis as an
+
+    y = np.asarray([curve[key][i] for i in indices], dtype=float)
+    mean, lo, hi, _ = an.mean_ci(y)
+    x = np.asarray(curve["steps"]) / 1000
+    line, = ax.plot(x, mean, style, color=colour, lw=1.2, label=label)
+    ax.fill_between(x, lo, hi, color=line.get_color(), alpha=0.2, lw=0)
+
+
+ONE_AGAINST_TWO = "full_length_one_against_two"
+
+
+def _one_against_two_figure(doc: dict, out: pathlib.Path) -> None:
+    """docs/figures/results/full_length_one_against_two.png: the curiosity of the one-agent
+    full-length sweep and of the two-agent one (the mean of its agents), a panel a policy both ran,
+    fig. 23 at the full length."""
+    import matplotlib.pyplot as plt
+
+    from mjx_curio import analysis as an
+
+    a = doc["agents"]
+    by = {x["sweep"]: x for x in doc["sweeps"]}
+    groups = list(dict.fromkeys(r["group"] for r in a["rows"]))
+    fig, axes = plt.subplots(1, len(groups), figsize=(max(4.0 * len(groups), 7.0), 3.2), sharey=True, squeeze=False)
+    for ax, label in zip(axes[0], groups):
+        for side, style in (("one", "-"), ("two", "--")):
+            e = by[a[side]]
+            idx = e["curves"]["groups"][label]
+            _band(ax, e["curves"]["long"], idx, "runs", style,
+                  label=f"{e['agents']} agent{'s' if e['agents'] > 1 else ''}, {len(idx)} seeds, {_device(e['device'])}")
+        ax.axvspan((a["steps"] - a["late_steps"]) / 1000, a["steps"] / 1000, color="0.9", lw=0)
+        ax.set_title(label, fontsize=9)
+        ax.set_xlabel("agent step (thousands)")
+        ax.legend(fontsize=7)
+    axes[0][0].set_ylabel("curiosity")
+    fig.tight_layout()
+    an.save_figure(fig, out, ONE_AGAINST_TWO, dpi=DPI)
+    plt.close(fig)
 
 
 def claims_block(presets: dict) -> str:

@@ -404,8 +404,34 @@ def test_the_committed_full_length_numbers_are_what_their_runs_give(results):
     stats = pytest.importorskip("scipy.stats")
     if not results.FULL_LENGTH.exists():
         pytest.skip("no full-length sweep measured")
-    for e in json.loads(results.FULL_LENGTH.read_text())["sweeps"]:
+    doc = json.loads(results.FULL_LENGTH.read_text())
+    for e in doc["sweeps"]:
         _check_full_length_sweep(e, stats)
+    if "agents" in doc:
+        _check_one_against_two(doc, stats)
+
+
+def _check_one_against_two(doc: dict, stats):
+    """The one-agent sweep against the two-agent one: each side's per-run numbers are its own
+    entry's last steps, Welch's test and Holm's correction SciPy's, claim 3's row the UCB rule."""
+    a = doc["agents"]
+    by = {x["sweep"]: x for x in doc["sweeps"]}
+    assert by[a["one"]]["agents"] == 1 and by[a["two"]]["agents"] == 2
+    late = {w: {(h["group"], h["measure"]): h["second"] for h in by[a[w]]["halves"]} for w in ("one", "two")}
+    ps = []
+    for r in a["rows"]:
+        assert r["one"] == late["one"][(r["group"], r["measure"])] and r["two"] == late["two"][(r["group"], r["measure"])]
+        want = stats.ttest_ind(np.array(r["two"]), np.array(r["one"]), equal_var=False)
+        assert r["p"] == pytest.approx(want.pvalue, rel=1e-6) and r["t"] == pytest.approx(want.statistic, rel=1e-6)
+        ps.append(r["p"])
+    order = np.argsort(ps)
+    want_holm = np.maximum.accumulate(np.minimum(1.0, (len(ps) - np.arange(len(ps))) * np.array(ps)[order]))
+    assert [a["rows"][i]["p_holm"] for i in order] == pytest.approx(list(want_holm))
+    ucb = [r for r in a["rows"] if r["group"].startswith("UCB") and r["measure"] in ("curiosity", "vae_loss")]
+    [row] = [r for r in doc["claims"] if r["claim"] == "3"] if ucb else [None]
+    if ucb:
+        holds = all(r["p"] < 0.05 and r["diff"] > 0 for r in ucb)
+        assert row["verdict"].startswith("holds" if holds else "does not hold")
 
 
 def _check_full_length_sweep(e: dict, stats):
@@ -604,8 +630,80 @@ def test_a_side_experiment_stands_for_its_preset_at_the_full_length():
     module = _full_length_module()
     s, t = types.SimpleNamespace(name="a"), types.SimpleNamespace(name="b")
     assert module.stands_for({"multi_agent.full_length": s, "single_agent": t}) == {"multi_agent": s, "single_agent": t}
-    with pytest.raises(ValueError, match="both stand for multi_agent"):
-        module.stands_for({"multi_agent": s, "multi_agent.full_length": t})
+
+
+def test_sweeps_of_one_presets_different_policies_stand_for_it_together(tiny_sweep, tmp_path):
+    """`single_agent.full_length` (ε-greedy) and `single_agent.full_length_ucb` (UCB), as the tiny
+    sweep's runs of each policy: one sweep of both; a run in both is refused, naming it."""
+    module = _full_length_module()
+    whole = an.load(tiny_sweep)
+    eps, ucb = whole.select(policy="eps"), whole.select(policy="ucb")
+    parts = {}
+    for name, runs, policy in (("multi_agent.full_length", eps, "eps"), ("multi_agent.full_length_ucb", ucb, "ucb")):
+        path = _subset_sweep(tiny_sweep, tmp_path / name, list(runs))
+        manifest = json.loads((path / "manifest.json").read_text())
+        manifest["config"]["policies"] = [policy]
+        (path / "manifest.json").write_text(json.dumps(manifest))
+        parts[name] = an.load(path)
+    [(preset, both)] = module.stands_for(parts).items()
+    assert preset == "multi_agent" and both.name == "multi_agent.full_length + multi_agent.full_length_ucb"
+    assert [g.policy for g in both.groups()] == ["eps", "ucb"] and both.n_runs == len(eps) + len(ucb)
+    assert np.array_equal(both.metrics["curiosity"], whole.metrics["curiosity"][[*eps, *ucb]])
+    again = an.load(_subset_sweep(tiny_sweep, tmp_path / "again", [eps[0]]))
+    with pytest.raises(an.SweepError, match="seed"):
+        module.stands_for({**parts, "multi_agent.again": again})
+
+
+def _late_entry(preset: str, agents: int, late: dict, steps: int = 80_000) -> dict:
+    """A full-length entry of `preset` whose runs' last-steps measures are `late` ({group:
+    {measure: per-run list}})."""
+    halves = [{"group": g, "measure": m, "what": m, "second": v} for g, ms in late.items() for m, v in ms.items()]
+    first = np.cumsum([0] + [len(ms["curiosity"]) for ms in late.values()])
+    groups = {g: list(range(a, b)) for g, a, b in zip(late, first[:-1], first[1:])}
+    bins = list(range(1000, steps + 1, 1000))
+    runs = [[c] * len(bins) for ms in late.values() for c in ms["curiosity"]]  # flat at the late level
+    return {"preset": preset, "sweep": preset + ".long", "agents": agents, "steps": steps, "late_steps": 10_000,
+            "halves": halves, "device": {"platform": "cpu", "cpu": "X"},
+            "curves": {"bin_steps": 1000, "groups": groups, "long": {"steps": bins, "runs": runs}}}
+
+
+def test_one_agent_against_two_at_the_full_length_on_planted_entries(results, tmp_path):
+    # Two agents planted higher by 0.1 in curiosity and by 10 in the VAE loss, with a spread of
+    # 0.01 and 1: claim 3 holds; the same runs the other way round: it does not.
+    module = _full_length_module()
+    spread = lambda m, n, d: [m + d * k for k in np.linspace(-1, 1, n)]  # noqa: E731
+    ucb, eps = "UCB (c=1)", "ε-greedy (ε=0.2)"
+    low = {"curiosity": spread(0.4, 3, 0.01), "vae_loss": spread(100, 3, 1), "recon": spread(70, 3, 1)}
+    high = {"curiosity": spread(0.5, 8, 0.01), "vae_loss": spread(110, 8, 1), "recon": spread(80, 8, 1)}
+    one = _late_entry("single_agent", 1, {eps: low, ucb: low})
+    two = _late_entry("multi_agent", 2, {eps: high, ucb: high, "Boltzmann (T=1.5)": high})
+    a = module.one_against_two([two, one])
+    assert [(r["group"], r["measure"]) for r in a["rows"]] == [(g, m) for g in (eps, ucb) for m in module.AGENT_MEASURES]
+    r = a["rows"][0]
+    assert r["one"] == low["curiosity"] and r["two"] == high["curiosity"] and r["diff"] == pytest.approx(0.1)
+    assert a["claim"]["claim"] == "3" and a["claim"]["verdict"] == "holds (both Welch tests p < 0.05, multi > single)"
+    assert "mean over steps 70,000-80,000" in a["claim"]["statistic"] and a["claim"]["presets"] == ["multi_agent",
+                                                                                                   "single_agent"]
+    swapped = module.one_against_two([_late_entry("single_agent", 1, {ucb: high}), _late_entry("multi_agent", 2, {ucb: low})])
+    assert swapped["claim"]["verdict"].startswith("does not hold: curiosity not significantly higher with two agents")
+    assert module.one_against_two([one, {**two, "steps": 40_000}]) is None
+    assert module.one_against_two([one]) is None
+    assert module.one_against_two([_late_entry("single_agent", 1, {eps: low}), two])["claim"] is None  # no UCB: no row
+    # In the file: claim 3's row replaces one computed before from the same two presets, and the
+    # page sets the table out.
+    old = {"claim": "3", "verdict": "stale", "presets": ["multi_agent", "single_agent"]}
+    doc = module.with_one_against_two({"claims": [{"claim": "13", "presets": ["single_agent"]}, old],
+                                       "sweeps": [two, one]})
+    assert [r["claim"] for r in doc["claims"]] == ["3", "13"] and doc["claims"][0]["verdict"].startswith("holds")
+    assert set(doc["agents"]) == {"one", "two", "steps", "late_steps", "rows"}
+    lines = results._one_against_two(doc["agents"], {x["sweep"]: x for x in doc["sweeps"]})
+    assert "Holm's correction over the table's 6 tests" in lines[0] and "different machines" not in lines[0]
+    assert f"| {ucb} | curiosity | 0.4 (3) | 0.5 (8) | +0.1 | {results._p(a['rows'][3]['p'])} " \
+           f"| {results._p(a['rows'][3]['p_holm'])} |" in lines
+    assert f"![{results.ONE_AGAINST_TWO}](figures/results/{results.ONE_AGAINST_TWO}.png)" in lines
+    results._one_against_two_figure(doc, tmp_path)  # save_figure refuses a panel with nothing drawn
+    assert (tmp_path / f"{results.ONE_AGAINST_TWO}.png").is_file()
+    assert "agents" not in module.with_one_against_two({"claims": [], "sweeps": [one]})
 
 
 # ---------------------------------------------------------------------- snapshots of tiny sweeps
