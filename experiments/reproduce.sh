@@ -138,7 +138,11 @@
 # 0-2, 2 h 1 min alone on a 2-core AMD EPYC (CPU family 25 model 17, 33-34 run-steps/s), not run by
 # this script; full_length_evidence.py sets it beside the committed single_agent runs:
 #     python -m mjx_curio.sweep preset=single_agent policies=eps seeds=3 steps=80000 checkpoint_every=2000 out=runs/paper/single_agent.full_length
-#     python experiments/full_length_evidence.py runs/paper/single_agent.full_length
+# and under UCB (figs. 23 and 24's setting: claim 3 against the main job's UCB runs), 1 h 50 min
+# on the same CPU (36-38 run-steps/s alone); full_length_evidence.py reads the two as one sweep of
+# single_agent:
+#     python -m mjx_curio.sweep preset=single_agent policies=ucb seeds=3 steps=80000 checkpoint_every=2000 out=runs/paper/single_agent.full_length_ucb
+#     python experiments/full_length_evidence.py runs/paper/single_agent.full_length runs/paper/single_agent.full_length_ucb
 #
 # The paper's full scale (8 seeds, 80,000 steps, every preset) is a GPU job: install the CUDA
 # extra (pip install -e '.[cuda]') and run

@@ -46,6 +46,7 @@ import pathlib
 import re
 import shutil
 import sys
+import textwrap
 from typing import Callable
 
 import numpy as np
@@ -682,7 +683,8 @@ def full_length_figure(path: pathlib.Path = FULL_LENGTH, out: pathlib.Path = FIG
         fig, axes = plt.subplots(1, len(groups), figsize=(max(4.0 * len(groups), 7.0), 3.2), sharey=True, squeeze=False)
         for ax, label in zip(axes[0], groups):
             for side, groups_of, style, dev in sides:
-                _band(ax, cv[side], groups_of[label], "runs", style, label=f"{dev}, {len(groups_of[label])} seeds")
+                _band(ax, cv[side], groups_of[label], "runs", style,
+                      label=_legend_label(f"{dev}, {len(groups_of[label])} seeds"))
             ax.set_title(label, fontsize=9)
             ax.set_xlabel("agent step (thousands)")
             ax.legend(fontsize=7)
@@ -721,6 +723,12 @@ def _band(ax, curve, indices, key, style, colour=None, label=None):
     ax.fill_between(x, lo, hi, color=line.get_color(), alpha=0.2, lw=0)
 
 
+def _legend_label(text: str) -> str:
+    """A legend entry in lines of at most 45 characters: a list of CPU models in one line would
+    widen the legend past its panel."""
+    return textwrap.fill(text, 45)
+
+
 ONE_AGAINST_TWO = "full_length_one_against_two"
 
 
@@ -741,7 +749,8 @@ def _one_against_two_figure(doc: dict, out: pathlib.Path) -> None:
             e = by[a[side]]
             idx = e["curves"]["groups"][label]
             _band(ax, e["curves"]["long"], idx, "runs", style,
-                  label=f"{e['agents']} agent{'s' if e['agents'] > 1 else ''}, {len(idx)} seeds, {_device(e['device'])}")
+                  label=_legend_label(f"{e['agents']} agent{'s' if e['agents'] > 1 else ''}, {len(idx)} seeds, "
+                                      f"{_device(e['device'])}"))
         ax.axvspan((a["steps"] - a["late_steps"]) / 1000, a["steps"] / 1000, color="0.9", lw=0)
         ax.set_title(label, fontsize=9)
         ax.set_xlabel("agent step (thousands)")
