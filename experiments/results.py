@@ -463,10 +463,17 @@ def full_length_block(path: pathlib.Path = FULL_LENGTH) -> str:
     return "\n".join(lines) + "\n"
 
 
+def _measure_formats() -> dict:
+    """{measure: its number format} of the full-length tables' measures (`analysis.walls.MEASURES`)."""
+    from mjx_curio.analysis.walls import MEASURES
+
+    return {key: fmt for key, _, fmt in MEASURES}
+
+
 def _one_against_two(a: dict, sweeps: dict) -> list[str]:
     """The one-agent sweep against the two-agent one at the full length (`one_against_two` of
     full_length_evidence.py): claim 3's measures over the last steps, per policy both ran."""
-    fmt = {"curiosity": ".3g", "vae_loss": ".1f", "recon": ".1f"}
+    fmt = _measure_formats()
     one, two = sweeps[a["one"]], sweeps[a["two"]]
     lo, hi = a["steps"] - a["late_steps"], a["steps"]
     n = sum(r["p"] is not None for r in a["rows"])
@@ -496,7 +503,7 @@ def _full_length_sweep(e: dict) -> list[str]:
     c = e["committed"]
     late = e["late_steps"]
     a, b = c["steps"] - late, c["steps"]
-    fmt = {"curiosity": ".3g", "vae_loss": ".1f", "recon": ".1f", "object_contacts": ".3g"}
+    fmt = _measure_formats()
 
     def rows(entries, left, right):
         out = []
