@@ -632,9 +632,10 @@ def test_a_side_experiment_stands_for_its_preset_at_the_full_length():
     assert module.stands_for({"multi_agent.full_length": s, "single_agent": t}) == {"multi_agent": s, "single_agent": t}
 
 
-def test_sweeps_of_one_presets_different_policies_stand_for_it_together(tiny_sweep, tmp_path):
+def test_sweeps_of_one_presets_different_policies_stand_for_it_together(tiny_sweep, tmp_path, monkeypatch):
     """`single_agent.full_length` (ε-greedy) and `single_agent.full_length_ucb` (UCB), as the tiny
-    sweep's runs of each policy: one sweep of both; a run in both is refused, naming it."""
+    sweep's runs of each policy: one sweep of both, whose entry names both parts, keeps each
+    part's command and their one machine once; a run in both is refused, naming it."""
     module = _full_length_module()
     whole = an.load(tiny_sweep)
     eps, ucb = whole.select(policy="eps"), whole.select(policy="ucb")
@@ -649,6 +650,13 @@ def test_sweeps_of_one_presets_different_policies_stand_for_it_together(tiny_swe
     assert preset == "multi_agent" and both.name == "multi_agent.full_length + multi_agent.full_length_ucb"
     assert [g.policy for g in both.groups()] == ["eps", "ucb"] and both.n_runs == len(eps) + len(ucb)
     assert np.array_equal(both.metrics["curiosity"], whole.metrics["curiosity"][[*eps, *ucb]])
+    monkeypatch.setattr(module, "LATE_STEPS", 40)
+    monkeypatch.setattr(module, "BIN_STEPS", 40)
+    short = an.load(_copy_sweep(tiny_sweep, tmp_path / "first_half", windows_done=whole.n_windows // 2))
+    e = module.sweep_evidence("multi_agent", both, short)
+    assert e["sweep"] == both.name and e["runs"] == both.n_runs
+    assert e["command"] == " && ".join(p.manifest["command"] for p in both.parts) and " && " in e["command"]
+    assert e["device"] == whole.manifest["device"]  # one machine: its record once, not a list
     again = an.load(_subset_sweep(tiny_sweep, tmp_path / "again", [eps[0]]))
     with pytest.raises(an.SweepError, match="seed"):
         module.stands_for({**parts, "multi_agent.again": again})
