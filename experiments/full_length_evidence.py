@@ -303,9 +303,10 @@ def stands_for(assigned: dict) -> dict:
     """{preset: sweep} from `analysis.assign_presets`'s answer: a sweep named `<preset>.<label>`
     (`runs/paper/single_agent.full_length`), which the page keeps apart from its preset, is here
     the preset at its full length. Several such sweeps of one preset, each of some of its policies
-    (`single_agent.full_length` of ε-greedy, `single_agent.full_length_ucb` of UCB), stand for it
-    as one (`analysis.merge_sweeps`; SweepError where they differ in more than their policies or
-    repeat a run)."""
+    (`single_agent.full_length` of ε-greedy, `single_agent.full_length_ucb` of UCB, each perhaps
+    its seeds in parts that `assign_presets` has joined), stand for it as one
+    (`analysis.merge_sweeps`; SweepError where they differ in more than their policies or repeat a
+    run)."""
     from mjx_curio import analysis as an
 
     parts: dict[str, list] = {}

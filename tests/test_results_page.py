@@ -633,21 +633,27 @@ def test_a_side_experiment_stands_for_its_preset_at_the_full_length():
 
 
 def test_sweeps_of_one_presets_different_policies_stand_for_it_together(tiny_sweep, tmp_path, monkeypatch):
-    """`single_agent.full_length` (ε-greedy) and `single_agent.full_length_ucb` (UCB), as the tiny
-    sweep's runs of each policy: one sweep of both, whose entry names both parts, keeps each
-    part's command and their one machine once; a run in both is refused, naming it."""
+    """`single_agent.full_length` (ε-greedy, its seeds in two parts, the second
+    `single_agent.full_length.seeds-3-5`) and `single_agent.full_length_ucb` (UCB), as the tiny
+    sweep's runs of each policy: one sweep of all, whose entry names them, keeps each part's
+    command and their one machine once; a run in two is refused, naming it."""
     module = _full_length_module()
     whole = an.load(tiny_sweep)
     eps, ucb = whole.select(policy="eps"), whole.select(policy="ucb")
+    assert [whole.runs[i].seed for i in eps] == [0, 1]
     parts = {}
-    for name, runs, policy in (("multi_agent.full_length", eps, "eps"), ("multi_agent.full_length_ucb", ucb, "ucb")):
+    for name, runs, policy in (("multi_agent.full_length", eps[:1], "eps"), ("multi_agent.full_length.seeds-1", eps[1:], "eps"),
+                               ("multi_agent.full_length_ucb", ucb, "ucb")):
         path = _subset_sweep(tiny_sweep, tmp_path / name, list(runs))
         manifest = json.loads((path / "manifest.json").read_text())
         manifest["config"]["policies"] = [policy]
+        manifest["command"] += f" out={name}"  # each part its own command
         (path / "manifest.json").write_text(json.dumps(manifest))
         parts[name] = an.load(path)
-    [(preset, both)] = module.stands_for(parts).items()
-    assert preset == "multi_agent" and both.name == "multi_agent.full_length + multi_agent.full_length_ucb"
+    [(preset, both)] = module.stands_for(an.assign_presets(parts)).items()
+    assert preset == "multi_agent" and both.name == "multi_agent.full_length.seeds-0-1 + multi_agent.full_length_ucb"
+    assert [p.name for p in both.parts] == list(parts)  # the sweeps read from disk, seed parts and all
+    assert [p["path"] for p in both.manifest["parts"]] == [str(tmp_path / name) for name in parts]
     assert [g.policy for g in both.groups()] == ["eps", "ucb"] and both.n_runs == len(eps) + len(ucb)
     assert np.array_equal(both.metrics["curiosity"], whole.metrics["curiosity"][[*eps, *ucb]])
     monkeypatch.setattr(module, "LATE_STEPS", 40)
@@ -655,7 +661,7 @@ def test_sweeps_of_one_presets_different_policies_stand_for_it_together(tiny_swe
     short = an.load(_copy_sweep(tiny_sweep, tmp_path / "first_half", windows_done=whole.n_windows // 2))
     e = module.sweep_evidence("multi_agent", both, short)
     assert e["sweep"] == both.name and e["runs"] == both.n_runs
-    assert e["command"] == " && ".join(p.manifest["command"] for p in both.parts) and " && " in e["command"]
+    assert e["command"] == " && ".join(p.manifest["command"] for p in parts.values())
     assert e["device"] == whole.manifest["device"]  # one machine: its record once, not a list
     again = an.load(_subset_sweep(tiny_sweep, tmp_path / "again", [eps[0]]))
     with pytest.raises(an.SweepError, match="seed"):

@@ -104,7 +104,8 @@ class Sweep:
       steps: int array [windows]: the agent step at the end of each final window.
       metrics: name -> array [runs, windows, ...] (see `metrics.SCHEMA` / manifest
         `metrics.schema` for units and meanings), the final windows only.
-      parts: the sweeps it was merged from (`merge_sweeps`), else empty.
+      parts: the sweeps it was merged from (`merge_sweeps`; of a merge of merged sweeps, theirs:
+        the sweeps read from disk), else empty.
     """
 
     def __init__(self, path: pathlib.Path, manifest: dict, progress: dict, steps: np.ndarray, metrics: dict):
@@ -500,17 +501,19 @@ def merge_sweeps(parts: Sequence[Sweep], differ: Sequence[str] = ()) -> Sweep:
     recorded = {**first.manifest["metrics"], "windows": windows}
     if "schema" in recorded:
         recorded["schema"] = {k: v for k, v in recorded["schema"].items() if all(k in _arrays(s) for s in parts)}
+    # A merge of merged sweeps (seed parts joined, then policies) keeps the sweeps read from disk.
+    leaves = tuple(leaf for s in parts for leaf in (s.parts or (s,)))
     manifest = {**first.manifest, "runs": rows, "metrics": recorded,
                 "config": config,
                 "parts": [{"path": str(s.path), "command": s.manifest.get("command"), "git": s.manifest.get("git")}
-                          for s in parts]}
+                          for s in leaves]}
     progress = {"windows_done": windows, "steps_done": int(steps[-1]) if windows else 0, "halted": halted}
     metrics = {k: np.concatenate([s.metrics[k][:, :windows] for s in parts]) for k in common}
     merged = Sweep(first.path, manifest, progress, steps, metrics)
     # Seeds of one experiment read as one sweep named by its seeds; pieces of a grid by their parts.
     merged.name = (" + ".join(s.name for s in parts) if differ
                    else seeds_name(parts[0].name, [r.seed for r in merged.runs]))
-    merged.parts = tuple(parts)
+    merged.parts = leaves
     return merged
 
 
