@@ -135,14 +135,17 @@
 # script:
 #     python -m mjx_curio.sweep preset=multi_agent policies=eps seeds=4 steps=40000 vae_layers=authors checkpoint_every=1000 out=runs/paper/multi_agent.authors_vae
 # One agent under epsilon-greedy at the paper's full 80,000 steps (figs. 8-10's setting), seeds
-# 0-2, 2 h 1 min alone on a 2-core AMD EPYC (CPU family 25 model 17, 33-34 run-steps/s), not run by
-# this script; full_length_evidence.py sets it beside the committed single_agent runs:
+# 0-2, 2 h 1 min alone on a 2-core AMD EPYC (CPU family 25 model 17, 33-34 run-steps/s), and
+# seeds 3-5, 1 h 51 min over two sessions (the second resumed with resume=true; 38-42 run-steps/s
+# alone), not run by this script; full_length_evidence.py sets them beside the committed
+# single_agent runs:
 #     python -m mjx_curio.sweep preset=single_agent policies=eps seeds=3 steps=80000 checkpoint_every=2000 out=runs/paper/single_agent.full_length
+#     python -m mjx_curio.sweep preset=single_agent policies=eps seeds=3 first_seed=3 steps=80000 checkpoint_every=2000 out=runs/paper/single_agent.full_length.seeds-3-5
 # and under UCB (figs. 23 and 24's setting: claim 3 against the main job's UCB runs), 1 h 50 min
-# on the same CPU (36-38 run-steps/s alone); full_length_evidence.py reads the two as one sweep of
-# single_agent:
+# on the same CPU (36-38 run-steps/s alone); full_length_evidence.py reads the three as one sweep
+# of single_agent:
 #     python -m mjx_curio.sweep preset=single_agent policies=ucb seeds=3 steps=80000 checkpoint_every=2000 out=runs/paper/single_agent.full_length_ucb
-#     python experiments/full_length_evidence.py runs/paper/single_agent.full_length runs/paper/single_agent.full_length_ucb
+#     python experiments/full_length_evidence.py runs/paper/single_agent.full_length runs/paper/single_agent.full_length.seeds-3-5 runs/paper/single_agent.full_length_ucb
 #
 # The paper's full scale (8 seeds, 80,000 steps, every preset) is a GPU job: install the CUDA
 # extra (pip install -e '.[cuda]') and run
