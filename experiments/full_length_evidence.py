@@ -33,7 +33,8 @@ machines, or in different sessions, stand side by side:
   `results.py page` draws the figures;
 - `agents`: where the file holds a one-agent and a two-agent sweep of the same length, the two
   set against each other over their last 10,000 steps (`one_against_two`), claim 3 at the full
-  length, whose row joins the claims.
+  length, whose row joins the claims; and the same over their committed runs' last 10,000 steps,
+  where the two sides may share their machines when the full-length sweeps do not.
 
 Per sweep (`sweeps`), `platforms`, `halves` and `curves`. It refuses a sweep that fits no
 preset, whose runs were set up differently (`analysis.run_config`; how the runs are looped over
@@ -236,11 +237,13 @@ def one_against_two(sweeps: list) -> dict | None:
     The verdict, as claim 3's: the UCB runs (the paper's choice), both curiosity and the VAE loss
     higher with two agents at p < 0.05 (no claim row where either side lacks UCB runs). The two
     entries may come from different machines: their `platforms` tables say how far that alone
-    moves the same measures.
+    moves the same measures, and `committed` sets one agent against two on the committed runs.
 
     {"one", "two": the sweeps' names, "steps", "late_steps", "rows": [{"group", "measure", "what",
-    "one", "two" (per run), "diff" (two - one), "t", "p", "p_holm"}], "claim": the claims-table
-    row, or None}."""
+    "one", "two" (per run), "diff" (two - one), "t", "p", "p_holm"}], "committed": where both
+    entries have their committed runs' measures at one length, {"one", "two": those sweeps' names,
+    "steps", "rows": the same rows over the last LATE_STEPS of those runs}, "claim": the
+    claims-table row, or None}."""
     from mjx_curio import analysis as an
     from mjx_curio.analysis.claims import claim_two_agents_higher
     from mjx_curio.analysis.claims.common import ALPHA, _ci, _decide, _f, _p
@@ -250,17 +253,7 @@ def one_against_two(sweeps: list) -> dict | None:
     if one is None or two is None or one["steps"] != two["steps"] or one["late_steps"] != two["late_steps"]:
         return None
     late = lambda e: {(h["group"], h["measure"]): h for h in e["halves"]}  # noqa: E731
-    a, b = late(one), late(two)
-    groups = [g for g in dict.fromkeys(h["group"] for h in one["halves"]) if any(k[0] == g for k in b)]
-    rows = []
-    for g in groups:
-        for key in AGENT_MEASURES:
-            x, y = a[(g, key)], b[(g, key)]
-            t = an.welch_t(np.asarray(y["second"], float), np.asarray(x["second"], float))
-            rows.append({"group": g, "measure": key, "what": x["what"], "one": x["second"], "two": y["second"],
-                         "diff": _num(t["diff"]), "p": _num(t["p"]), "t": _num(t["t"])})
-    for row, q in zip(rows, holm([r["p"] for r in rows])):
-        row["p_holm"] = q
+    rows = _two_against_one(late(one), late(two), "second")
     lo, hi = one["steps"] - one["late_steps"], one["steps"]
     ucb = [r for r in rows if r["group"].startswith(an.POLICY_LABELS["ucb"]) and r["measure"] != "recon"]
     result = claim_two_agents_higher({})  # its wording; with no sweep it tests nothing
@@ -276,8 +269,43 @@ def one_against_two(sweeps: list) -> dict | None:
             f"full_length.json keeps of every run), {one['sweep']} vs {two['sweep']}: " + "; ".join(parts))
     claim = {"claim": result.key, "text": result.claim, "statistic": stat, "presets": [TWO, ONE],
              "verdict": _decide([], fails, "both Welch tests p < 0.05, multi > single")}
-    return {"one": one["sweep"], "two": two["sweep"], "steps": hi, "late_steps": one["late_steps"], "rows": rows,
-            "claim": claim if ucb else None}  # without UCB runs on both sides, the claim is not tested
+    out = {"one": one["sweep"], "two": two["sweep"], "steps": hi, "late_steps": one["late_steps"], "rows": rows,
+           "claim": claim if ucb else None}  # without UCB runs on both sides, the claim is not tested
+    committed = _committed_one_against_two(one, two)
+    return {**out, "committed": committed} if committed else out
+
+
+def _two_against_one(one: dict, two: dict, side: str) -> list:
+    """Rows of `one_against_two`: for each policy both {(group, measure): row} dicts hold (in
+    `one`'s order) and each of AGENT_MEASURES, the per-run numbers `row[side]` of two agents
+    against one, Welch's two-sided t-test, and Holm's correction over the rows' tests."""
+    from mjx_curio import analysis as an
+
+    groups = [g for g in dict.fromkeys(k[0] for k in one) if any(k[0] == g for k in two)]
+    rows = []
+    for g in groups:
+        for key in AGENT_MEASURES:
+            x, y = one[(g, key)], two[(g, key)]
+            t = an.welch_t(np.asarray(y[side], float), np.asarray(x[side], float))
+            rows.append({"group": g, "measure": key, "what": x["what"], "one": x[side], "two": y[side],
+                         "diff": _num(t["diff"]), "p": _num(t["p"]), "t": _num(t["t"])})
+    for row, q in zip(rows, holm([r["p"] for r in rows])):
+        row["p_holm"] = q
+    return rows
+
+
+def _committed_one_against_two(one: dict, two: dict) -> dict | None:
+    """One agent against two over the committed runs' last LATE_STEPS (each entry's `platforms`
+    keeps those runs' measures, all their seeds): the same question where both sides ran on the
+    committed runs' machines, so that the full length's difference of machine can be read against
+    it. None where an entry lacks them or the two committed lengths differ."""
+    if not all("platforms" in e and "committed" in e for e in (one, two)):
+        return None
+    if one["committed"]["steps"] != two["committed"]["steps"]:
+        return None
+    short = lambda e: {(r["group"], r["measure"]): r for r in e["platforms"]}  # noqa: E731
+    return {"one": one["committed"]["sweep"], "two": two["committed"]["sweep"], "steps": one["committed"]["steps"],
+            "rows": _two_against_one(short(one), short(two), "short")}
 
 
 def _nan(v) -> float:

@@ -477,13 +477,23 @@ def _one_against_two(a: dict, sweeps: dict) -> list[str]:
     one, two = sweeps[a["one"]], sweeps[a["two"]]
     lo, hi = a["steps"] - a["late_steps"], a["steps"]
     n = sum(r["p"] is not None for r in a["rows"])
-    rows = []
-    for r in a["rows"]:
-        f = fmt.get(r["measure"], ".3g")
-        d = f"{r['diff']:+{f}}" if r["diff"] is not None else "—"
-        rows.append(f"| {r['group']} | {r['what']} | {_mean(r['one']):{f}} ({len(r['one'])}) | "
-                    f"{_mean(r['two']):{f}} ({len(r['two'])}) | {d} | {_p(r['p'])} | {_p(r['p_holm'])} |")
+
+    def table(entries) -> list[str]:
+        out = ["| policy | measure | one agent | two agents | difference | p | p (Holm) |", "|---|---|---|---|---|---|---|"]
+        for r in entries:
+            f = fmt.get(r["measure"], ".3g")
+            d = f"{r['diff']:+{f}}" if r["diff"] is not None else "—"
+            out.append(f"| {r['group']} | {r['what']} | {_mean(r['one']):{f}} ({len(r['one'])}) | "
+                       f"{_mean(r['two']):{f}} ({len(r['two'])}) | {d} | {_p(r['p'])} | {_p(r['p_holm'])} |")
+        return out
+
     same = one["device"] == two["device"]
+    c = a.get("committed")
+    committed = [] if not c else [
+        f"The same over the committed runs' last {a['late_steps']:,} steps (steps {c['steps'] - a['late_steps']:,}-"
+        f"{c['steps']:,}): `{c['one']}` on {_device(one['committed']['devices'])} against `{c['two']}` on "
+        f"{_device(two['committed']['devices'])}, all their seeds, Holm's correction over the table's "
+        f"{sum(r['p'] is not None for r in c['rows'])} tests:", "", *table(c["rows"]), ""]
     return [f"One agent against two at the full length (claim 3, figs. 23 and 24): `{a['one']}` on "
             f"{_device(one['device'])} against `{a['two']}` on {_device(two['device'])}, the curiosity, the VAE "
             f"loss per image and its reconstruction term over steps {lo:,}-{hi:,}, per policy both ran (the claim's "
@@ -491,8 +501,7 @@ def _one_against_two(a: dict, sweeps: dict) -> list[str]:
             f"agents minus one, Welch's two-sided t-test, and Holm's correction over the table's {n} tests"
             + ("" if same else "; the two ran on different machines, and each sweep's first table above says "
                "how far the machine alone moves these measures") + ":", "",
-            "| policy | measure | one agent | two agents | difference | p | p (Holm) |",
-            "|---|---|---|---|---|---|---|", *rows, "",
+            *table(a["rows"]), "", *committed,
             f"![{ONE_AGAINST_TWO}](figures/results/{ONE_AGAINST_TWO}.png)", "",
             f"*Curiosity in bins of {one['curves']['bin_steps']:,} steps, mean over seeds with its 95 % CI: one agent "
             f"(`{a['one']}`, solid) and two (`{a['two']}`, the mean of the agents, dashed), the paper's fig. 23 at "

@@ -418,20 +418,33 @@ def _check_one_against_two(doc: dict, stats):
     by = {x["sweep"]: x for x in doc["sweeps"]}
     assert by[a["one"]]["agents"] == 1 and by[a["two"]]["agents"] == 2
     late = {w: {(h["group"], h["measure"]): h["second"] for h in by[a[w]]["halves"]} for w in ("one", "two")}
-    ps = []
-    for r in a["rows"]:
-        assert r["one"] == late["one"][(r["group"], r["measure"])] and r["two"] == late["two"][(r["group"], r["measure"])]
-        want = stats.ttest_ind(np.array(r["two"]), np.array(r["one"]), equal_var=False)
-        assert r["p"] == pytest.approx(want.pvalue, rel=1e-6) and r["t"] == pytest.approx(want.statistic, rel=1e-6)
-        ps.append(r["p"])
-    order = np.argsort(ps)
-    want_holm = np.maximum.accumulate(np.minimum(1.0, (len(ps) - np.arange(len(ps))) * np.array(ps)[order]))
-    assert [a["rows"][i]["p_holm"] for i in order] == pytest.approx(list(want_holm))
+    _check_two_against_one(a["rows"], late, stats)
+    if "committed" in a:  # the same on the committed runs: each side's `platforms` numbers of them
+        c = a["committed"]
+        assert (c["one"], c["two"]) == (by[a["one"]]["committed"]["sweep"], by[a["two"]]["committed"]["sweep"])
+        assert c["steps"] == by[a["one"]]["committed"]["steps"] == by[a["two"]]["committed"]["steps"]
+        short = {w: {(r["group"], r["measure"]): r["short"] for r in by[a[w]]["platforms"]} for w in ("one", "two")}
+        _check_two_against_one(c["rows"], short, stats)
+        assert [(r["group"], r["measure"]) for r in c["rows"]] == [(r["group"], r["measure"]) for r in a["rows"]]
     ucb = [r for r in a["rows"] if r["group"].startswith("UCB") and r["measure"] in ("curiosity", "vae_loss")]
     [row] = [r for r in doc["claims"] if r["claim"] == "3"] if ucb else [None]
     if ucb:
         holds = all(r["p"] < 0.05 and r["diff"] > 0 for r in ucb)
         assert row["verdict"].startswith("holds" if holds else "does not hold")
+
+
+def _check_two_against_one(rows: list, runs: dict, stats):
+    """Each row's per-run numbers are `runs`' ({"one", "two": {(group, measure): list}}), its
+    Welch test SciPy's, and Holm's correction over the rows recomputed."""
+    ps = []
+    for r in rows:
+        assert r["one"] == runs["one"][(r["group"], r["measure"])] and r["two"] == runs["two"][(r["group"], r["measure"])]
+        want = stats.ttest_ind(np.array(r["two"]), np.array(r["one"]), equal_var=False)
+        assert r["p"] == pytest.approx(want.pvalue, rel=1e-6) and r["t"] == pytest.approx(want.statistic, rel=1e-6)
+        ps.append(r["p"])
+    order = np.argsort(ps)
+    want_holm = np.maximum.accumulate(np.minimum(1.0, (len(ps) - np.arange(len(ps))) * np.array(ps)[order]))
+    assert [rows[i]["p_holm"] for i in order] == pytest.approx(list(want_holm))
 
 
 def _check_full_length_sweep(e: dict, stats):
@@ -718,6 +731,23 @@ def test_one_agent_against_two_at_the_full_length_on_planted_entries(results, tm
     results._one_against_two_figure(doc, tmp_path)  # save_figure refuses a panel with nothing drawn
     assert (tmp_path / f"{results.ONE_AGAINST_TWO}.png").is_file()
     assert "agents" not in module.with_one_against_two({"claims": [], "sweeps": [one]})
+    # Where both entries keep their committed runs' measures at one length, the same comparison
+    # on those runs (planted the other way round: one agent the higher) follows the table.
+    def committed(e, late, steps=40_000):
+        return {**e, "committed": {"sweep": e["preset"], "steps": steps, "devices": [{"platform": "cpu", "cpu": "Y"}]},
+                "platforms": [{"group": g, "measure": m, "what": m, "short": v} for g, ms in late.items() for m, v in ms.items()]}
+    c = module.one_against_two([committed(one, {eps: high, ucb: high}), committed(two, {eps: low, ucb: low})])["committed"]
+    assert (c["one"], c["two"], c["steps"]) == ("single_agent", "multi_agent", 40_000)
+    assert [(r["group"], r["measure"]) for r in c["rows"]] == [(r["group"], r["measure"]) for r in a["rows"]]
+    assert c["rows"][0]["one"] == high["curiosity"] and c["rows"][0]["diff"] == pytest.approx(-0.1)
+    assert "committed" not in module.one_against_two([committed(one, {ucb: high}), committed(two, {ucb: low}, 20_000)])
+    doc = module.with_one_against_two({"claims": [], "sweeps": [committed(two, {eps: low, ucb: low}),
+                                                                committed(one, {eps: high, ucb: high})]})
+    lines = results._one_against_two(doc["agents"], {x["sweep"]: x for x in doc["sweeps"]})
+    at = lines.index("The same over the committed runs' last 10,000 steps (steps 30,000-40,000): `single_agent` on a "
+                     "CPU (Y) against `multi_agent` on a CPU (Y), all their seeds, Holm's correction over the table's "
+                     "6 tests:")
+    assert lines[at + 4].startswith(f"| {eps} | curiosity | 0.5 (8) | 0.4 (3) | -0.1 |")  # high has 8 runs, low 3
 
 
 # ---------------------------------------------------------------------- snapshots of tiny sweeps
