@@ -473,19 +473,13 @@ def _measure_formats() -> dict:
 def _one_against_two(a: dict, sweeps: dict) -> list[str]:
     """The one-agent sweep against the two-agent one at the full length (`one_against_two` of
     full_length_evidence.py): claim 3's measures over the last steps, per policy both ran."""
-    fmt = _measure_formats()
     one, two = sweeps[a["one"]], sweeps[a["two"]]
     lo, hi = a["steps"] - a["late_steps"], a["steps"]
     n = sum(r["p"] is not None for r in a["rows"])
 
     def table(entries) -> list[str]:
-        out = ["| policy | measure | one agent | two agents | difference | p | p (Holm) |", "|---|---|---|---|---|---|---|"]
-        for r in entries:
-            f = fmt.get(r["measure"], ".3g")
-            d = f"{r['diff']:+{f}}" if r["diff"] is not None else "—"
-            out.append(f"| {r['group']} | {r['what']} | {_mean(r['one']):{f}} ({len(r['one'])}) | "
-                       f"{_mean(r['two']):{f}} ({len(r['two'])}) | {d} | {_p(r['p'])} | {_p(r['p_holm'])} |")
-        return out
+        return ["| policy | measure | one agent | two agents | difference | p | p (Holm) |", "|---|---|---|---|---|---|---|",
+                *_measure_rows(entries, "one", "two", counts=True)]
 
     same = one["device"] == two["device"]
     c = a.get("committed")
@@ -508,21 +502,25 @@ def _one_against_two(a: dict, sweeps: dict) -> list[str]:
             "its full length; shaded, the steps the table compares.*"]
 
 
+def _measure_rows(entries: list, left: str, right: str, counts: bool = False) -> list[str]:
+    """Table rows of the full-length file's per-run measures (`platforms`, `halves`, `agents`):
+    policy, measure, each side's mean over runs (and how many, where `counts`), the difference,
+    p and Holm's p."""
+    fmt = _measure_formats()
+    out = []
+    for r in entries:
+        f = fmt.get(r["measure"], ".3g")
+        d = f"{r['diff']:+{f}}" if r["diff"] is not None else "—"
+        n = {side: f" ({len(r[side])})" if counts else "" for side in (left, right)}
+        out.append(f"| {r['group']} | {r['what']} | {_mean(r[left]):{f}}{n[left]} | {_mean(r[right]):{f}}{n[right]} "
+                   f"| {d} | {_p(r['p'])} | {_p(r['p_holm'])} |")
+    return out
+
+
 def _full_length_sweep(e: dict) -> list[str]:
     c = e["committed"]
     late = e["late_steps"]
     a, b = c["steps"] - late, c["steps"]
-    fmt = _measure_formats()
-
-    def rows(entries, left, right):
-        out = []
-        for r in entries:
-            f = fmt.get(r["measure"], ".3g")
-            d = f"{r['diff']:+{f}}" if r["diff"] is not None else "—"
-            out.append(f"| {r['group']} | {r['what']} | {_mean(r[left]):{f}} | {_mean(r[right]):{f}} | {d} "
-                       f"| {_p(r['p'])} | {_p(r['p_holm'])} |")
-        return out
-
     n = sum(r["p"] is not None for r in e["platforms"])
     m = sum(r["p"] is not None for r in e["halves"])
     name = e["preset"]
@@ -533,12 +531,12 @@ def _full_length_sweep(e: dict) -> list[str]:
              f"over 0-{b:,}; means over seeds, Welch's two-sided t-test, and Holm's correction over the table's "
              f"{n} tests:", "",
              f"| policy | measure | {_device(e['device'])} | {_device(c['devices'])} | difference | p | p (Holm) |",
-             "|---|---|---|---|---|---|---|", *rows(e["platforms"], "long", "short"), "",
+             "|---|---|---|---|---|---|---|", *_measure_rows(e["platforms"], "long", "short"), "",
              f"What the second half of the run changes: the same measures, object contacts too, over steps "
              f"{e['steps'] - late:,}-{e['steps']:,} against {a:,}-{b:,}, run by run; the paired two-sided t-test, "
              f"Holm over {m} tests:", "",
              f"| policy | measure | steps {a:,}-{b:,} | steps {e['steps'] - late:,}-{e['steps']:,} | difference | p "
-             "| p (Holm) |", "|---|---|---|---|---|---|---|", *rows(e["halves"], "first", "second"), "",
+             "| p (Holm) |", "|---|---|---|---|---|---|---|", *_measure_rows(e["halves"], "first", "second"), "",
              *_contact_timing(e),
              f"![full_length_{name}_curiosity](figures/results/full_length_{name}_curiosity.png)", "",
              f"*Curiosity{' (the mean of the agents)' if e['agents'] > 1 else ''} in bins of "
