@@ -141,11 +141,13 @@
 # single_agent runs:
 #     python -m mjx_curio.sweep preset=single_agent policies=eps seeds=3 steps=80000 checkpoint_every=2000 out=runs/paper/single_agent.full_length
 #     python -m mjx_curio.sweep preset=single_agent policies=eps seeds=3 first_seed=3 steps=80000 checkpoint_every=2000 out=runs/paper/single_agent.full_length.seeds-3-5
-# and under UCB (figs. 23 and 24's setting: claim 3 against the main job's UCB runs), 1 h 50 min
-# on the same CPU (36-38 run-steps/s alone); full_length_evidence.py reads the three as one sweep
-# of single_agent:
+# and under UCB (figs. 23 and 24's setting: claim 3 against the main job's UCB runs), seeds 0-2,
+# 1 h 50 min on the same CPU (36-38 run-steps/s alone), and seeds 3-5, 2 h 11 min over two
+# sessions (the second resumed with resume=true; 34-36 run-steps/s alone); full_length_evidence.py
+# reads the four as one sweep of single_agent:
 #     python -m mjx_curio.sweep preset=single_agent policies=ucb seeds=3 steps=80000 checkpoint_every=2000 out=runs/paper/single_agent.full_length_ucb
-#     python experiments/full_length_evidence.py runs/paper/single_agent.full_length runs/paper/single_agent.full_length.seeds-3-5 runs/paper/single_agent.full_length_ucb
+#     python -m mjx_curio.sweep preset=single_agent policies=ucb seeds=3 first_seed=3 steps=80000 checkpoint_every=2000 out=runs/paper/single_agent.full_length_ucb.seeds-3-5
+#     python experiments/full_length_evidence.py runs/paper/single_agent.full_length runs/paper/single_agent.full_length.seeds-3-5 runs/paper/single_agent.full_length_ucb runs/paper/single_agent.full_length_ucb.seeds-3-5
 #
 # The paper's full scale (8 seeds, 80,000 steps, every preset) is a GPU job: install the CUDA
 # extra (pip install -e '.[cuda]') and run
