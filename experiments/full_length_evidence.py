@@ -39,7 +39,9 @@ machines, or in different sessions, stand side by side:
 Per sweep (`sweeps`), `platforms`, `halves` and `curves`. It refuses a sweep that fits no
 preset, whose runs were set up differently (`analysis.run_config`; how the runs are looped over
 may differ) from the committed runs, that has a policy or seed they lack, or that is not longer
-than them.
+than them; and sweeps that would stand for a preset with fewer runs of a policy than the file
+holds of it (`lost_runs`: measuring a preset anew replaces its entry whole, and the metrics of
+the entry there may not be on this machine), before reducing anything.
 """
 
 from __future__ import annotations
@@ -344,6 +346,23 @@ def stands_for(assigned: dict) -> dict:
             for preset, ps in parts.items()}
 
 
+def lost_runs(old: dict | None, longs: dict) -> list[str]:
+    """What measuring `longs` ({preset: sweep}) anew would drop from the file `old`: per preset it
+    holds, each policy whose runs there outnumber the new sweep's (`merged` replaces a preset's
+    entry whole, and the metrics behind an entry, the main job's on a GPU, may not be on this
+    machine to reduce again). Empty where nothing would be lost."""
+    lost = []
+    for e in (old or {}).get("sweeps", []):
+        if e["preset"] not in longs:
+            continue
+        new = {g.label: len(g.indices) for g in longs[e["preset"]].groups()}
+        short = [f"{label}: {len(idx)} runs against {new.get(label, 0)}"
+                 for label, idx in e["curves"]["groups"].items() if len(idx) > new.get(label, 0)]
+        if short:
+            lost.append(f"{e['preset']} (`{e['sweep']}`; {', '.join(short)})")
+    return lost
+
+
 def _read(path: pathlib.Path) -> dict | None:
     """The full-length JSON as it is, to add to (`merged`); None where there is none yet."""
     if not path.exists():
@@ -378,6 +397,10 @@ def main(argv: list[str]) -> int:
         if lost:
             raise ValueError(f"{', '.join(lost)}: fits no preset, or one another sweep given already stands for")
         old = _read(OUT)  # a damaged file stops the script before the sweeps are reduced
+        dropped = lost_runs(old, longs)
+        if dropped:
+            raise ValueError(f"{OUT} holds runs the sweeps given lack, which measuring them would drop: "
+                             f"{'; '.join(dropped)}; give those runs' sweeps too, or move the file aside")
         entry = evidence(longs, results.load_presets())
     except (an.SweepError, ValueError) as err:
         print(f"full_length_evidence.py: {err}", file=sys.stderr)

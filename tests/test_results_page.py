@@ -563,6 +563,35 @@ def test_full_length_evidence_keeps_what_the_file_holds_of_other_presets():
     assert module.merged({"claims": [row("3", "multi_agent", "single_agent")], "sweeps": []}, new)["claims"] == new["claims"]
 
 
+def test_full_length_evidence_refuses_to_drop_runs_the_file_holds(tiny_sweep, tmp_path, capsys, monkeypatch):
+    """Measuring a preset anew replaces its entry whole: sweeps with fewer runs of a policy than
+    the file holds of that preset are refused before anything is reduced, the file left as it is."""
+    module = _full_length_module()
+    sweep = an.load(tiny_sweep)
+    preset = next(iter(module.stands_for(an.assign_presets([sweep]))))
+    counts = {g.label: len(g.indices) for g in sweep.groups()}
+    first = next(iter(counts))
+    entry = lambda extra: {"preset": preset, "sweep": "held", "curves": {"groups": {  # noqa: E731
+        label: list(range(n + (extra if label == first else 0))) for label, n in counts.items()}}}
+    # As many runs of every policy as the file holds, or more: nothing is lost.
+    for extra in (0, -1):
+        assert module.lost_runs({"claims": [], "sweeps": [entry(extra)]}, {preset: sweep}) == []
+    assert module.lost_runs(None, {preset: sweep}) == []
+    assert module.lost_runs({"claims": [], "sweeps": [{**entry(1), "preset": "another"}]}, {preset: sweep}) == []
+    # One run more of the first policy in the file, and a policy the sweep lacks.
+    held = {**entry(1), "curves": {"groups": {**entry(1)["curves"]["groups"], "UCB (c=9)": [0, 1]}}}
+    assert module.lost_runs({"claims": [], "sweeps": [held]}, {preset: sweep}) == [
+        f"{preset} (`held`; {first}: {counts[first] + 1} runs against {counts[first]}, UCB (c=9): 2 runs against 0)"]
+    out = tmp_path / "full_length.json"
+    out.write_text(json.dumps({"claims": [], "sweeps": [held]}))
+    before = out.read_text()
+    monkeypatch.setattr(module, "OUT", out)
+    assert module.main([str(tiny_sweep)]) == 2
+    err = capsys.readouterr().err
+    assert "holds runs the sweeps given lack" in err and f"{first}: {counts[first] + 1} runs against" in err
+    assert "move the file aside" in err and out.read_text() == before
+
+
 def test_contact_timing_of_a_full_length_sweep_from_planted_cumulative_curves(results):
     # 80 bins of 1,000 steps. "steady": 2 contact steps a bin before step 25,000 and 4 + the run's
     # index after; "stops": 6 a bin up to step 30,000, none after, in two runs of three.
