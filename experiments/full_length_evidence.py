@@ -9,15 +9,18 @@ minutes (docs/cost_model.md). Such sweeps' metrics (the main job's about 25 MB) 
 committed; this script reduces them to what the results page shows and writes
 docs/results/full_length.json. Each sweep given stands for the preset whose settings it has
 (`analysis.assign_presets`: the main job is `multi_agent`; a sweep named `<preset>.<label>` stands
-for <preset>) and is compared with that preset's committed runs of the same settings, all their
-seeds (a full-length sweep may run some of the preset's policies and seeds: on a CPU, one agent's
-ε-greedy runs, fig. 8's setting, take hours where all of its runs take a day; sweeps of one
-preset's different policies stand for it together, `stands_for`). The file
-keeps what it holds of presets not given this time, so that sweeps measured on different
-machines, or in different sessions, stand side by side:
+for <preset>) on the platform it ran on, a CPU or a GPU (`platform_of`), and is compared with that
+preset's committed runs of the same settings, all their seeds (a full-length sweep may run some of
+the preset's policies and seeds: on a CPU, one agent's ε-greedy runs, fig. 8's setting, take hours
+where all of its runs take a day; sweeps of one preset's different policies on one platform stand
+for it together, `stands_for`). An entry of the file is a preset on a platform: the main job on a
+GPU and a few of its runs on a CPU are two entries. The file keeps what it holds of entries not
+given this time, so that sweeps measured on different machines, or in different sessions, stand
+side by side:
 
-- `claims`: the paper's claims that the given sweeps can test (`analysis.claims_table` on them
-  alone), at their full length, each row with the presets it was computed from (`presets`);
+- `claims`: the paper's claims that each given sweep can test by itself (`analysis.claims_table`
+  on it alone), at its full length, each row with the presets it was computed from (`presets`)
+  and the platform of each (`on`);
 - `platforms`: the sweep against the committed CPU runs over the steps both ran, policy by policy
   (`analysis.walls_measures`: late curiosity, the VAE loss per image and its reconstruction term
   over the last 10,000 of those steps, object contacts per 1,000 agent-steps over all of them);
@@ -31,17 +34,18 @@ machines, or in different sessions, stand side by side:
 - `curves`: each run's curiosity (the mean of its agents) in bins of 1,000 steps, and its contacts
   with objects and between the agents summed from the start, for both sets of runs, from which
   `results.py page` draws the figures;
-- `agents`: where the file holds a one-agent and a two-agent sweep of the same length, the two
-  set against each other over their last 10,000 steps (`one_against_two`), claim 3 at the full
-  length, whose row joins the claims; and the same over their committed runs' last 10,000 steps,
-  where the two sides may share their machines when the full-length sweeps do not.
+- `one_against_two`: for each one-agent and two-agent entry of the same length, the two set
+  against each other over their last 10,000 steps (`one_against_two`), claim 3 at the full
+  length, whose row joins the claims (pairs on one platform first); and the same over their
+  committed runs' last 10,000 steps, where the two sides may share their machines when the
+  full-length sweeps do not.
 
 Per sweep (`sweeps`), `platforms`, `halves` and `curves`. It refuses a sweep that fits no
 preset, whose runs were set up differently (`analysis.run_config`; how the runs are looped over
 may differ) from the committed runs, that has a policy or seed they lack, or that is not longer
-than them; and sweeps that would stand for a preset with fewer runs of a policy than the file
-holds of it (`lost_runs`: measuring a preset anew replaces its entry whole, and the metrics of
-the entry there may not be on this machine), before reducing anything.
+than them; and sweeps that would stand for an entry with fewer runs of a policy than the file
+holds of it (`lost_runs`: measuring an entry anew replaces it whole, and the metrics behind it
+may not be on this machine), before reducing anything.
 """
 
 from __future__ import annotations
@@ -171,7 +175,7 @@ def sweep_evidence(preset: str, long, short) -> dict:
             row["p_holm"] = q
     return {
         # a sweep merged from parts (`stands_for`): each part's command, and its machines, once each
-        "preset": preset, "sweep": long.name, "command": " && ".join(p.manifest.get("command", "") for p in parts),
+        "preset": preset, "platform": platform_of(devices), "sweep": long.name, "command": " && ".join(p.manifest.get("command", "") for p in parts),
         "device": devices[0] if len(devices) == 1 else devices, "versions": long.manifest.get("versions", {}),
         "steps": full, "runs": len(long.runs), "agents": long.n_agents,
         # a merged sweep's parts may have run on different machines
@@ -186,19 +190,34 @@ def sweep_evidence(preset: str, long, short) -> dict:
     }
 
 
+def platform_of(device: dict | list) -> str:
+    """"cpu" or "gpu": the platform of a sweep's machine (its manifest's `device`), or of a merged
+    sweep's machines (a list of them), which `stands_for` gives one platform; "cpu+gpu" where they
+    differ."""
+    ds = device if isinstance(device, list) else [device]
+    return "+".join(sorted({d.get("platform", "cpu") for d in ds}))
+
+
+def entry_key(e: dict) -> tuple[str, str]:
+    """(preset, platform): what an entry of the file stands for. An entry written before entries
+    recorded their platform has its machines' (`platform_of`)."""
+    return e["preset"], e.get("platform") or platform_of(e["device"])
+
+
 def evidence(longs: dict, committed: dict) -> dict:
-    """{"claims": the claims `longs` ({preset: sweep}) can test, "sweeps": `sweep_evidence` of each
-    against `committed`'s sweep of its preset}."""
+    """{"claims": the claims each sweep of `longs` ({(preset, platform): sweep}) can test by itself,
+    "sweeps": `sweep_evidence` of each against `committed`'s ({preset: sweep}) sweep of its preset}."""
     from mjx_curio import analysis as an
 
-    missing = sorted(set(longs) - set(committed))
+    missing = sorted({p for p, _ in longs} - set(committed))
     if missing:
         raise ValueError(f"no committed runs of {', '.join(missing)} to compare with")
-    claims = an.claims_table(longs)
-    presets = sorted(longs)
-    return {"claims": [{"claim": r[0], "text": r[1], "statistic": r[3], "verdict": r[4], "presets": presets}
-                       for r in claims.rows if not r[4].startswith("not testable")],
-            "sweeps": [sweep_evidence(p, longs[p], committed[p]) for p in presets]}
+    keys = sorted(longs)
+    return {"claims": [{"claim": r[0], "text": r[1], "statistic": r[3], "verdict": r[4], "presets": [preset],
+                        "on": [platform]}
+                       for preset, platform in keys for r in an.claims_table({preset: longs[preset, platform]}).rows
+                       if not r[4].startswith("not testable")],
+            "sweeps": [sweep_evidence(p, longs[p, pl], committed[p]) for p, pl in keys]}
 
 
 def _claim_order(claim: str) -> tuple[int, str]:
@@ -208,52 +227,70 @@ def _claim_order(claim: str) -> tuple[int, str]:
 
 
 def merged(old: dict | None, new: dict) -> dict:
-    """`new` (`evidence`) with what `old` (the file as it was) holds of other presets: its sweeps of
-    presets `new` does not measure, and its claims computed from none of `new`'s presets (a claim
-    computed from a preset measured anew is computed anew, or dropped with its sweep). Rows of a
-    file written before they recorded their presets came from all of that file's sweeps. Claims
-    in the claims table's order, a claim's rows in the order of their presets; sweeps by preset."""
+    """`new` (`evidence`) with what `old` (the file as it was) holds of other entries (`entry_key`):
+    its sweeps of presets on platforms `new` does not measure, and its claims computed from none of
+    `new`'s entries (a claim computed from an entry measured anew is computed anew, or dropped with
+    its sweep). Rows of a file written before they recorded their presets came from all of that
+    file's sweeps, and rows written before they recorded their platforms (`on`) from the one entry that
+    file held of each preset. Claims in the claims table's order, a claim's rows in the order of
+    their entries; sweeps by entry."""
     if not old:
         return new
-    fresh = {x["preset"] for x in new["sweeps"]}
+    fresh = {entry_key(x) for x in new["sweeps"]}
     before = sorted(x["preset"] for x in old["sweeps"])
-    kept = [{**r, "presets": r.get("presets", before)} for r in old["claims"]]
-    claims = [r for r in kept if not fresh & set(r["presets"])] + new["claims"]
-    sweeps = [x for x in old["sweeps"] if x["preset"] not in fresh] + new["sweeps"]
-    return {"claims": sorted(claims, key=lambda r: (_claim_order(r["claim"]), r["presets"])),
-            "sweeps": sorted(sweeps, key=lambda x: x["preset"])}
+    on = {x["preset"]: entry_key(x)[1] for x in old["sweeps"]}
+    kept = []
+    for r in old["claims"]:
+        presets = r.get("presets", before)
+        kept.append({**r, "presets": presets, "on": r.get("on", [on.get(p, "") for p in presets])})
+    claims = [r for r in kept if not fresh & set(zip(r["presets"], r["on"]))] + new["claims"]
+    sweeps = [{**x, "platform": entry_key(x)[1]} for x in old["sweeps"] if entry_key(x) not in fresh] + new["sweeps"]
+    return {"claims": _in_order(claims), "sweeps": sorted(sweeps, key=entry_key)}
+
+
+def _in_order(claims: list) -> list:
+    """Claims rows in the claims table's order, a claim's rows in the order of their entries."""
+    return sorted(claims, key=lambda r: (_claim_order(r["claim"]), r["presets"], r.get("on", [])))
 
 
 AGENT_MEASURES = ("curiosity", "vae_loss", "recon")  # claim 3's two, and the loss's reconstruction term
 ONE, TWO = "single_agent", "multi_agent"
 
 
-def one_against_two(sweeps: list) -> dict | None:
-    """Claim 3 (two agents have higher curiosity and a higher VAE loss than one) at the full length,
-    from the file's entries (`sweep_evidence`) of single_agent and multi_agent; None where one is
-    missing or they differ in length. The committed claim compares the second half of the steps
-    both sweeps ran; the file keeps, per run, the measures over the last LATE_STEPS (`halves`, a
-    sweep's own numbers whatever else the file holds), so the comparison is over those: per
-    policy both ran, the late curiosity, the VAE loss per image and its reconstruction term, two
-    agents against one, Welch's two-sided t-test and Holm's correction over the table's tests.
-    The verdict, as claim 3's: the UCB runs (the paper's choice), both curiosity and the VAE loss
-    higher with two agents at p < 0.05 (no claim row where either side lacks UCB runs). The two
-    entries may come from different machines: their `platforms` tables say how far that alone
-    moves the same measures, and `committed` sets one agent against two on the committed runs.
+def one_against_two(sweeps: list) -> list[dict]:
+    """Claim 3 at the full length for each pair of the file's entries of single_agent and
+    multi_agent (`pair_against`) of one length: pairs whose two sides ran on one platform first,
+    then by their platforms. Empty where there is no such pair."""
+    ones = [x for x in sweeps if x["preset"] == ONE]
+    twos = [x for x in sweeps if x["preset"] == TWO]
+    pairs = [(one, two) for one in ones for two in twos
+             if one["steps"] == two["steps"] and one["late_steps"] == two["late_steps"]]
+    pairs.sort(key=lambda p: (entry_key(p[0])[1] != entry_key(p[1])[1], entry_key(p[0])[1], entry_key(p[1])[1]))
+    return [pair_against(one, two) for one, two in pairs]
 
-    {"one", "two": the sweeps' names, "steps", "late_steps", "rows": [{"group", "measure", "what",
-    "one", "two" (per run), "diff" (two - one), "t", "p", "p_holm"}], "committed": where both
-    entries have their committed runs' measures at one length, {"one", "two": those sweeps' names,
-    "steps", "rows": the same rows over the last LATE_STEPS of those runs}, "claim": the
-    claims-table row, or None}."""
+
+def pair_against(one: dict, two: dict) -> dict:
+    """Claim 3 (two agents have higher curiosity and a higher VAE loss than one) at the full length,
+    from the file's entry (`sweep_evidence`) `one` of single_agent and `two` of multi_agent, of one
+    length. The committed claim compares the second half of the steps both sweeps ran; the file
+    keeps, per run, the measures over the last LATE_STEPS (`halves`, a sweep's own numbers
+    whatever else the file holds), so the comparison is over those: per policy both ran, the late
+    curiosity, the VAE loss per image and its reconstruction term, two agents against one, Welch's
+    two-sided t-test and Holm's correction over the table's tests. The verdict, as claim 3's: the
+    UCB runs (the paper's choice), both curiosity and the VAE loss higher with two agents at
+    p < 0.05 (no claim row where either side lacks UCB runs). The two entries may come from
+    different machines: their `platforms` tables say how far that alone moves the same measures,
+    and `committed` sets one agent against two on the committed runs.
+
+    {"one", "two": the sweeps' names, "on": their platforms (one's, two's), "steps", "late_steps",
+    "rows": [{"group", "measure", "what", "one", "two" (per run), "diff" (two - one), "t", "p",
+    "p_holm"}], "committed": where both entries have their committed runs' measures at one length,
+    {"one", "two": those sweeps' names, "steps", "rows": the same rows over the last LATE_STEPS of
+    those runs}, "claim": the claims-table row, or None}."""
     from mjx_curio import analysis as an
     from mjx_curio.analysis.claims import claim_two_agents_higher
     from mjx_curio.analysis.claims.common import ALPHA, _ci, _decide, _f, _p
 
-    by = {x["preset"]: x for x in sweeps}
-    one, two = by.get(ONE), by.get(TWO)
-    if one is None or two is None or one["steps"] != two["steps"] or one["late_steps"] != two["late_steps"]:
-        return None
     late = lambda e: {(h["group"], h["measure"]): h for h in e["halves"]}  # noqa: E731
     rows = _two_against_one(late(one), late(two), "second")
     lo, hi = one["steps"] - one["late_steps"], one["steps"]
@@ -267,11 +304,14 @@ def one_against_two(sweeps: list) -> dict | None:
                      f"p={_p(_nan(r['p']))}")
         if not (r["p"] is not None and r["p"] < ALPHA and r["diff"] > 0):
             fails.append(f"{what} not significantly higher with two agents")
+    on = [entry_key(one)[1], entry_key(two)[1]]
     stat = (f"mean over steps {lo:,}-{hi:,} of each run (the last {one['late_steps']:,} steps, which "
-            f"full_length.json keeps of every run), {one['sweep']} vs {two['sweep']}: " + "; ".join(parts))
+            f"full_length.json keeps of every run), {one['sweep']} ({on[0].upper()}) vs {two['sweep']} "
+            f"({on[1].upper()}): " + "; ".join(parts))
     claim = {"claim": result.key, "text": result.claim, "statistic": stat, "presets": [TWO, ONE],
-             "verdict": _decide([], fails, "both Welch tests p < 0.05, multi > single")}
-    out = {"one": one["sweep"], "two": two["sweep"], "steps": hi, "late_steps": one["late_steps"], "rows": rows,
+             "on": on[::-1], "verdict": _decide([], fails, "both Welch tests p < 0.05, multi > single")}
+    out = {"one": one["sweep"], "two": two["sweep"], "on": on, "steps": hi,
+           "late_steps": one["late_steps"], "rows": rows,
            "claim": claim if ucb else None}  # without UCB runs on both sides, the claim is not tested
     committed = _committed_one_against_two(one, two)
     return {**out, "committed": committed} if committed else out
@@ -316,50 +356,55 @@ def _nan(v) -> float:
 
 
 def with_one_against_two(doc: dict) -> dict:
-    """`doc` (`merged`) with `one_against_two` of its sweeps: the `agents` table, and claim 3's row
-    among the claims in place of one computed before from the same two presets."""
+    """`doc` (`merged`) with `one_against_two` of its sweeps: the `one_against_two` tables, and
+    their claim 3 rows among the claims in place of those computed before from the two presets (a
+    file written before it kept several pairs had one table, as `agents`)."""
     both = sorted([ONE, TWO])
     claims = [r for r in doc["claims"] if not (r["claim"] == "3" and sorted(r.get("presets", [])) == both)]
-    out = {k: v for k, v in doc.items() if k != "agents"}
-    cross = one_against_two(doc["sweeps"])
-    if cross is not None:
-        claims += [cross["claim"]] if cross["claim"] else []
-        out["agents"] = {k: v for k, v in cross.items() if k != "claim"}
-    out["claims"] = sorted(claims, key=lambda r: (_claim_order(r["claim"]), r["presets"]))
+    out = {k: v for k, v in doc.items() if k not in ("agents", "one_against_two")}
+    tables = one_against_two(doc["sweeps"])
+    claims += [t["claim"] for t in tables if t["claim"]]
+    if tables:
+        out["one_against_two"] = [{k: v for k, v in t.items() if k != "claim"} for t in tables]
+    out["claims"] = _in_order(claims)
     return out
 
 
 def stands_for(assigned: dict) -> dict:
-    """{preset: sweep} from `analysis.assign_presets`'s answer: a sweep named `<preset>.<label>`
-    (`runs/paper/single_agent.full_length`), which the page keeps apart from its preset, is here
-    the preset at its full length. Several such sweeps of one preset, each of some of its policies
+    """{(preset, platform): sweep} from `analysis.assign_presets`'s answer: a sweep named
+    `<preset>.<label>` (`runs/paper/single_agent.full_length`), which the page keeps apart from its
+    preset, is here the preset at its full length on the platform it ran on (`platform_of`).
+    Several such sweeps of one preset on one platform, each of some of its policies
     (`single_agent.full_length` of ε-greedy, `single_agent.full_length_ucb` of UCB, each perhaps
     its seeds in parts that `assign_presets` has joined), stand for it as one
     (`analysis.merge_sweeps`; SweepError where they differ in more than their policies or repeat a
-    run)."""
+    run); on different platforms they are different entries (the main job on a GPU, a few of its
+    runs again on a CPU)."""
     from mjx_curio import analysis as an
 
-    parts: dict[str, list] = {}
+    parts: dict[tuple[str, str], list] = {}
     for key, sweep in assigned.items():
-        parts.setdefault(key.partition(".")[0], []).append(sweep)
-    return {preset: ps[0] if len(ps) == 1 else an.merge_sweeps(ps, differ=("policies",))
-            for preset, ps in parts.items()}
+        platform = platform_of(sweep.manifest.get("device", {}))
+        parts.setdefault((key.partition(".")[0], platform), []).append(sweep)
+    return {key: ps[0] if len(ps) == 1 else an.merge_sweeps(ps, differ=("policies",))
+            for key, ps in parts.items()}
 
 
 def lost_runs(old: dict | None, longs: dict) -> list[str]:
-    """What measuring `longs` ({preset: sweep}) anew would drop from the file `old`: per preset it
-    holds, each policy whose runs there outnumber the new sweep's (`merged` replaces a preset's
-    entry whole, and the metrics behind an entry, the main job's on a GPU, may not be on this
-    machine to reduce again). Empty where nothing would be lost."""
+    """What measuring `longs` ({(preset, platform): sweep}) anew would drop from the file `old`: per
+    entry it holds (`entry_key`), each policy whose runs there outnumber the new sweep's (`merged`
+    replaces an entry whole, and the metrics behind an entry, the main job's on a GPU, may not be
+    on this machine to reduce again). Empty where nothing would be lost."""
     lost = []
     for e in (old or {}).get("sweeps", []):
-        if e["preset"] not in longs:
+        key = entry_key(e)
+        if key not in longs:
             continue
-        new = {g.label: len(g.indices) for g in longs[e["preset"]].groups()}
+        new = {g.label: len(g.indices) for g in longs[key].groups()}
         short = [f"{label}: {len(idx)} runs against {new.get(label, 0)}"
                  for label, idx in e["curves"]["groups"].items() if len(idx) > new.get(label, 0)]
         if short:
-            lost.append(f"{e['preset']} (`{e['sweep']}`; {', '.join(short)})")
+            lost.append(f"{key[0]} on {key[1].upper()} (`{e['sweep']}`; {', '.join(short)})")
     return lost
 
 
@@ -408,7 +453,8 @@ def main(argv: list[str]) -> int:
     entry = with_one_against_two(merged(old, entry))
     OUT.parent.mkdir(parents=True, exist_ok=True)
     OUT.write_text(json.dumps(entry, indent=1, allow_nan=False) + "\n")
-    kept = [f"`{x['sweep']}` ({x['preset']})" for x in entry["sweeps"] if x["preset"] not in longs]
+    kept = [f"`{x['sweep']}` ({x['preset']} on {entry_key(x)[1].upper()})" for x in entry["sweeps"]
+            if entry_key(x) not in longs]
     print(f"wrote {OUT}" + (f", keeping {', '.join(kept)}" if kept else "") + "\n")
     print(results.full_length_block(OUT))
     return 0

@@ -446,9 +446,10 @@ def full_length_block(path: pathlib.Path = FULL_LENGTH) -> str:
     if not path.exists():
         return "No sweep of the paper's full length has been measured yet (`experiments/full_length_evidence.py`).\n"
     e = json.loads(path.read_text())
-    names = ", ".join(f"`{x['sweep']}` ({x['preset']}, {x['steps']:,} steps)" for x in e["sweeps"])
+    names = ", ".join(f"`{x['sweep']}` ({x['preset']}, {x['steps']:,} steps on {_device(x['device'])})"
+                      for x in e["sweeps"])
     several = len(e["sweeps"]) > 1
-    together = (", and claim 3 the one-agent and the two-agent sweep together"
+    together = (", and claim 3 each one-agent and two-agent sweep of one length together"
                 if any(len(r.get("presets", [])) > 1 for r in e["claims"]) else "")
     lines = [f"The claims that {'each of ' if several else ''}the full-length sweep{'s' if several else ''} {names} "
              f"can test by itself{together} (the claims table above has them at the committed runs' length):", "",
@@ -458,8 +459,21 @@ def full_length_block(path: pathlib.Path = FULL_LENGTH) -> str:
         lines += [row for x in e["sweeps"] for row in _agent_contact_order_row(x)]
     for x in e["sweeps"]:
         lines += ["", *_full_length_sweep(x)]
-    if "agents" in e:
-        lines += ["", *_one_against_two(e["agents"], {x["sweep"]: x for x in e["sweeps"]})]
+    shown = set()  # the committed runs' table once: every pair of the same two presets shares it
+    for a in e.get("one_against_two", []):
+        c = a.get("committed")
+        seen = c is not None and (c["one"], c["two"], c["steps"]) in shown
+        lines += ["", *_one_against_two(a, {x["sweep"]: x for x in e["sweeps"]}, committed=not seen)]
+        if c is not None:
+            shown.add((c["one"], c["two"], c["steps"]))
+    if e.get("one_against_two"):
+        ones, twos = _one_against_two_styles(e["one_against_two"])
+        said = lambda sides: "; ".join(f"`{name}`, {STYLE_WORDS[style]}" for name, style in sides)  # noqa: E731
+        lines += ["", f"![{ONE_AGAINST_TWO}](figures/results/{ONE_AGAINST_TWO}.png)", "",
+                  f"*Curiosity in bins of {e['sweeps'][0]['curves']['bin_steps']:,} steps, mean over seeds with its "
+                  f"95 % CI: one agent ({said(ones)}) and two (the mean of the agents; {said(twos)}), the paper's "
+                  "fig. 23 at its full length; shaded, the steps the table"
+                  f"{'s' if len(e['one_against_two']) > 1 else ''} compare{'' if len(e['one_against_two']) > 1 else 's'}.*"]
     return "\n".join(lines) + "\n"
 
 
@@ -470,9 +484,10 @@ def _measure_formats() -> dict:
     return {key: fmt for key, _, fmt in MEASURES}
 
 
-def _one_against_two(a: dict, sweeps: dict) -> list[str]:
-    """The one-agent sweep against the two-agent one at the full length (`one_against_two` of
-    full_length_evidence.py): claim 3's measures over the last steps, per policy both ran."""
+def _one_against_two(a: dict, sweeps: dict, committed: bool = True) -> list[str]:
+    """A one-agent sweep against a two-agent one at the full length (a table of `one_against_two` in
+    full_length_evidence.py): claim 3's measures over the last steps, per policy both ran; then,
+    where `committed`, the same over the committed runs."""
     one, two = sweeps[a["one"]], sweeps[a["two"]]
     lo, hi = a["steps"] - a["late_steps"], a["steps"]
     n = sum(r["p"] is not None for r in a["rows"])
@@ -482,12 +497,12 @@ def _one_against_two(a: dict, sweeps: dict) -> list[str]:
                 *_measure_rows(entries, "one", "two", counts=True)]
 
     same = one["device"] == two["device"]
-    c = a.get("committed")
-    committed = [] if not c else [
+    c = a.get("committed") if committed else None
+    below = [] if not c else [
         f"The same over the committed runs' last {a['late_steps']:,} steps (steps {c['steps'] - a['late_steps']:,}-"
         f"{c['steps']:,}): `{c['one']}` on {_device(one['committed']['devices'])} against `{c['two']}` on "
         f"{_device(two['committed']['devices'])}, all their seeds, Holm's correction over the table's "
-        f"{sum(r['p'] is not None for r in c['rows'])} tests:", "", *table(c["rows"]), ""]
+        f"{sum(r['p'] is not None for r in c['rows'])} tests:", "", *table(c["rows"])]
     return [f"One agent against two at the full length (claim 3, figs. 23 and 24): `{a['one']}` on "
             f"{_device(one['device'])} against `{a['two']}` on {_device(two['device'])}, the curiosity, the VAE "
             f"loss per image and its reconstruction term over steps {lo:,}-{hi:,}, per policy both ran (the claim's "
@@ -495,11 +510,7 @@ def _one_against_two(a: dict, sweeps: dict) -> list[str]:
             f"agents minus one, Welch's two-sided t-test, and Holm's correction over the table's {n} tests"
             + ("" if same else "; the two ran on different machines, and each sweep's first table above says "
                "how far the machine alone moves these measures") + ":", "",
-            *table(a["rows"]), "", *committed,
-            f"![{ONE_AGAINST_TWO}](figures/results/{ONE_AGAINST_TWO}.png)", "",
-            f"*Curiosity in bins of {one['curves']['bin_steps']:,} steps, mean over seeds with its 95 % CI: one agent "
-            f"(`{a['one']}`, solid) and two (`{a['two']}`, the mean of the agents, dashed), the paper's fig. 23 at "
-            "its full length; shaded, the steps the table compares.*"]
+            *table(a["rows"]), *([""] + below if below else [])]
 
 
 def _measure_rows(entries: list, left: str, right: str, counts: bool = False) -> list[str]:
@@ -523,8 +534,8 @@ def _full_length_sweep(e: dict) -> list[str]:
     a, b = c["steps"] - late, c["steps"]
     n = sum(r["p"] is not None for r in e["platforms"])
     m = sum(r["p"] is not None for r in e["halves"])
-    name = e["preset"]
-    lines = [f"`{e['sweep']}` ({name}): {e['runs']} runs × {e['steps']:,} steps on {_device(e['device'])}, beside the "
+    name = _figure_name(e)
+    lines = [f"`{e['sweep']}` ({e['preset']}): {e['runs']} runs × {e['steps']:,} steps on {_device(e['device'])}, beside the "
              f"committed runs `{c['sweep']}` ({c['runs']} runs × {c['steps']:,} steps on {_device(c['devices'])}).", "",
              f"{_same_runs(e)} in the two sets of runs, over the steps both ran: curiosity, the VAE loss "
              f"per image and its reconstruction term over steps {a:,}-{b:,}, object contacts per 1,000 agent-steps "
@@ -538,12 +549,12 @@ def _full_length_sweep(e: dict) -> list[str]:
              f"| policy | measure | steps {a:,}-{b:,} | steps {e['steps'] - late:,}-{e['steps']:,} | difference | p "
              "| p (Holm) |", "|---|---|---|---|---|---|---|", *_measure_rows(e["halves"], "first", "second"), "",
              *_contact_timing(e),
-             f"![full_length_{name}_curiosity](figures/results/full_length_{name}_curiosity.png)", "",
+             f"![{name}_curiosity](figures/results/{name}_curiosity.png)", "",
              f"*Curiosity{' (the mean of the agents)' if e['agents'] > 1 else ''} in bins of "
              f"{e['curves']['bin_steps']:,} steps, mean over seeds "
              f"with its 95 % CI: the {e['runs']} runs of {e['steps']:,} steps (solid) and the committed runs of "
              f"{c['steps']:,} (dashed).*", "",
-             f"![full_length_{name}_interactions](figures/results/full_length_{name}_interactions.png)", "",
+             f"![{name}_interactions](figures/results/{name}_interactions.png)", "",
              "*Contact steps summed from the start, "
              + ("agent-object (both agents) and agent-agent, mean over seeds with its 95 % CI, per policy: the "
                 "paper's figs. 21 and 22 at their full length, in contact steps rather than normalised"
@@ -553,6 +564,12 @@ def _full_length_sweep(e: dict) -> list[str]:
              + f"; the {e['runs']} runs of {e['steps']:,} steps (solid) and the committed runs of {c['steps']:,} "
              "(dashed).*"]
     return lines
+
+
+def _figure_name(e: dict) -> str:
+    """The stem of a full-length entry's figures: its preset and platform (`full_length_multi_agent_gpu`),
+    as the file may hold a preset on a CPU and on a GPU."""
+    return f"full_length_{e['preset']}_{e['platform']}"
 
 
 def _same_runs(e: dict) -> str:
@@ -593,10 +610,16 @@ def _policy_groups(groups: dict) -> dict:
 
 def _full_length_curves(path: pathlib.Path = FULL_LENGTH) -> tuple[dict, str]:
     """full_length.json's runs as `analysis.paper_numbers_table` takes them, {preset: (curves,
-    {policy: run indices})}, and a label naming them; ({}, "") where there is none."""
+    {policy: run indices})}, and a label naming them; ({}, "") where there is none. Of a preset
+    the file holds on two platforms, the entry of more runs (the main job on a GPU, not a few of
+    its runs on a CPU)."""
     if not path.exists():
         return {}, ""
-    sweeps = json.loads(path.read_text())["sweeps"]
+    most = {}
+    for e in json.loads(path.read_text())["sweeps"]:
+        if e["runs"] > most.get(e["preset"], {"runs": -1})["runs"]:
+            most[e["preset"]] = e
+    sweeps = list(most.values())
     long = {e["preset"]: (e["curves"]["long"], _policy_groups(e["curves"]["groups"])) for e in sweeps}
     return long, " and ".join(f"`{e['sweep']}`, {e['steps']:,} steps on {_device(e['device'])}" for e in sweeps)
 
@@ -674,9 +697,9 @@ def _contact_timing(e: dict) -> list[str]:
 
 
 def full_length_figure(path: pathlib.Path = FULL_LENGTH, out: pathlib.Path = FIGURES) -> None:
-    """Per sweep of full_length.json, docs/figures/results/full_length_<preset>_curiosity.png (a
-    panel a policy) and full_length_<preset>_interactions.png (object contacts, and agent
-    contacts where there are two agents); where it sets one agent against two, their curiosity
+    """Per sweep of full_length.json, docs/figures/results/full_length_<preset>_<platform>_curiosity.png
+    (a panel a policy) and ..._interactions.png (object contacts, and agent contacts where there
+    are two agents); where it sets one agent against two, their curiosity
     (`_one_against_two_figure`)."""
     if not path.exists():
         return
@@ -704,7 +727,7 @@ def full_length_figure(path: pathlib.Path = FULL_LENGTH, out: pathlib.Path = FIG
             ax.legend(fontsize=7)
         axes[0][0].set_ylabel("curiosity")
         fig.tight_layout()
-        an.save_figure(fig, out, f"full_length_{e['preset']}_curiosity", dpi=DPI)
+        an.save_figure(fig, out, f"{_figure_name(e)}_curiosity", dpi=DPI)
         plt.close(fig)
         kinds = [("object_contacts", "agent-object contacts")] + (
             [("agent_contacts", "agent-agent contacts")] if e["agents"] > 1 else [])
@@ -719,9 +742,9 @@ def full_length_figure(path: pathlib.Path = FULL_LENGTH, out: pathlib.Path = FIG
         axes[0][0].set_ylabel("contact steps since the start")
         axes[0][0].legend(fontsize=7)
         fig.tight_layout()
-        an.save_figure(fig, out, f"full_length_{e['preset']}_interactions", dpi=DPI)
+        an.save_figure(fig, out, f"{_figure_name(e)}_interactions", dpi=DPI)
         plt.close(fig)
-    if "agents" in doc:
+    if doc.get("one_against_two"):
         _one_against_two_figure(doc, out)
 
 
@@ -744,27 +767,43 @@ def _legend_label(text: str) -> str:
 
 
 ONE_AGAINST_TWO = "full_length_one_against_two"
+STYLE_WORDS = {"-": "solid", "--": "dashed", ":": "dotted", "-.": "dash-dotted"}
+
+
+def _one_against_two_styles(tables: list) -> tuple[list, list]:
+    """The sweeps of full_length.json's `one_against_two` tables with their line styles in
+    `ONE_AGAINST_TWO`'s figure: ([(one-agent sweep, style)], [(two-agent sweep, style)]); one
+    agent solid, two dashed, a second two-agent sweep dotted."""
+    ones = [(name, "-") for name in dict.fromkeys(a["one"] for a in tables)]
+    twos = [(name, ("--", ":", "-.")[k % 3]) for k, name in enumerate(dict.fromkeys(a["two"] for a in tables))]
+    return ones, twos
 
 
 def _one_against_two_figure(doc: dict, out: pathlib.Path) -> None:
-    """docs/figures/results/full_length_one_against_two.png: the curiosity of the one-agent
-    full-length sweep and of the two-agent one (the mean of its agents), a panel a policy both ran,
-    fig. 23 at the full length."""
+    """docs/figures/results/full_length_one_against_two.png: the curiosity of every full-length
+    sweep that `one_against_two` sets one agent against two with (the mean of its agents), a
+    panel a policy some pair ran: fig. 23 at the full length. One agent solid, two dashed, a
+    second two-agent sweep dotted."""
     import matplotlib.pyplot as plt
 
     from mjx_curio import analysis as an
 
-    a = doc["agents"]
+    tables = doc["one_against_two"]
     by = {x["sweep"]: x for x in doc["sweeps"]}
-    groups = list(dict.fromkeys(r["group"] for r in a["rows"]))
+    groups = list(dict.fromkeys(r["group"] for a in tables for r in a["rows"]))
+    ones, twos = _one_against_two_styles(tables)
+    styles = ones + twos
     fig, axes = plt.subplots(1, len(groups), figsize=(max(4.0 * len(groups), 7.0), 3.2), sharey=True, squeeze=False)
     for ax, label in zip(axes[0], groups):
-        for side, style in (("one", "-"), ("two", "--")):
-            e = by[a[side]]
-            idx = e["curves"]["groups"][label]
+        for name, style in styles:
+            e = by[name]
+            idx = e["curves"]["groups"].get(label)
+            if idx is None:  # a sweep of some of the policies
+                continue
             _band(ax, e["curves"]["long"], idx, "runs", style,
                   label=_legend_label(f"{e['agents']} agent{'s' if e['agents'] > 1 else ''}, {len(idx)} seeds, "
                                       f"{_device(e['device'])}"))
+        a = tables[0]
         ax.axvspan((a["steps"] - a["late_steps"]) / 1000, a["steps"] / 1000, color="0.9", lw=0)
         ax.set_title(label, fontsize=9)
         ax.set_xlabel("agent step (thousands)")

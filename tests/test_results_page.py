@@ -407,16 +407,17 @@ def test_the_committed_full_length_numbers_are_what_their_runs_give(results):
     doc = json.loads(results.FULL_LENGTH.read_text())
     for e in doc["sweeps"]:
         _check_full_length_sweep(e, stats)
-    if "agents" in doc:
-        _check_one_against_two(doc, stats)
+    assert len({(e["preset"], e["platform"]) for e in doc["sweeps"]}) == len(doc["sweeps"])  # one entry each
+    for a in doc.get("one_against_two", []):
+        _check_one_against_two(doc, a, stats)
 
 
-def _check_one_against_two(doc: dict, stats):
-    """The one-agent sweep against the two-agent one: each side's per-run numbers are its own
-    entry's last steps, Welch's test and Holm's correction SciPy's, claim 3's row the UCB rule."""
-    a = doc["agents"]
+def _check_one_against_two(doc: dict, a: dict, stats):
+    """A one-agent sweep against a two-agent one: each side's per-run numbers are its own entry's
+    last steps, Welch's test and Holm's correction SciPy's, claim 3's row the UCB rule."""
     by = {x["sweep"]: x for x in doc["sweeps"]}
     assert by[a["one"]]["agents"] == 1 and by[a["two"]]["agents"] == 2
+    assert a["on"] == [by[a["one"]]["platform"], by[a["two"]]["platform"]]
     late = {w: {(h["group"], h["measure"]): h["second"] for h in by[a[w]]["halves"]} for w in ("one", "two")}
     _check_two_against_one(a["rows"], late, stats)
     if "committed" in a:  # the same on the committed runs: each side's `platforms` numbers of them
@@ -427,7 +428,7 @@ def _check_one_against_two(doc: dict, stats):
         _check_two_against_one(c["rows"], short, stats)
         assert [(r["group"], r["measure"]) for r in c["rows"]] == [(r["group"], r["measure"]) for r in a["rows"]]
     ucb = [r for r in a["rows"] if r["group"].startswith("UCB") and r["measure"] in ("curiosity", "vae_loss")]
-    [row] = [r for r in doc["claims"] if r["claim"] == "3"] if ucb else [None]
+    [row] = [r for r in doc["claims"] if r["claim"] == "3" and r["on"] == a["on"][::-1]] if ucb else [None]
     if ucb:
         holds = all(r["p"] < 0.05 and r["diff"] > 0 for r in ucb)
         assert row["verdict"].startswith("holds" if holds else "does not hold")
@@ -481,9 +482,10 @@ def test_full_length_evidence_on_the_tiny_sweep(results, tiny_sweep, tiny_single
     short = an.load(_copy_sweep(tiny_sweep, tmp_path / "first_half", windows_done=long.metrics["curiosity"].shape[1] // 2))
     assert short.steps_done == long.steps_done // 2
     with pytest.raises(ValueError, match="no committed runs of multi_agent"):
-        module.evidence({"multi_agent": long}, {})
-    whole = module.evidence({"multi_agent": long}, {"multi_agent": short})
-    assert [x["preset"] for x in whole["sweeps"]] == ["multi_agent"]
+        module.evidence({("multi_agent", "cpu"): long}, {})
+    whole = module.evidence({("multi_agent", "cpu"): long}, {"multi_agent": short})
+    assert [(x["preset"], x["platform"]) for x in whole["sweeps"]] == [("multi_agent", "cpu")]
+    assert {(tuple(r["presets"]), tuple(r["on"])) for r in whole["claims"]} <= {(("multi_agent",), ("cpu",))}
     e = whole["sweeps"][0]
     assert e["agents"] == 2 and e["steps"] == long.steps_done and e["committed"]["steps"] == short.steps_done
     measures = 4
@@ -503,9 +505,9 @@ def test_full_length_evidence_on_the_tiny_sweep(results, tiny_sweep, tiny_single
     path.write_text(json.dumps(whole))
     block = results.full_length_block(path)
     assert block.count("| curiosity |") == 2 * len(long.groups())
-    assert "Holm's correction over the table's" in block and "full_length_multi_agent_curiosity.png" in block
+    assert "Holm's correction over the table's" in block and "full_length_multi_agent_cpu_curiosity.png" in block
     results.full_length_figure(path, out=tmp_path / "figures")  # save_figure refuses a panel with nothing drawn
-    for name in ("full_length_multi_agent_curiosity", "full_length_multi_agent_interactions"):
+    for name in ("full_length_multi_agent_cpu_curiosity", "full_length_multi_agent_cpu_interactions"):
         assert (tmp_path / "figures" / f"{name}.png").is_file(), name
     with pytest.raises(ValueError, match="other settings"):
         module.sweep_evidence("multi_agent", long, an.load(tiny_single_sweep))
@@ -525,7 +527,7 @@ def test_full_length_evidence_sets_fewer_runs_beside_all_the_committed_ones(resu
     eps, ucb = whole.select(policy="eps"), whole.select(policy="ucb")
     long = an.load(_subset_sweep(tiny_sweep, tmp_path / "some", [*eps, ucb[0]]))
     short = an.load(_copy_sweep(tiny_sweep, tmp_path / "first_half", windows_done=whole.n_windows // 2))
-    e = module.evidence({"multi_agent": long}, {"multi_agent": short})["sweeps"][0]
+    e = module.evidence({("multi_agent", "cpu"): long}, {"multi_agent": short})["sweeps"][0]
     assert e["runs"] == len(eps) + 1 and e["committed"]["runs"] == whole.n_runs
     by_group = {r["group"]: r for r in e["platforms"] if r["measure"] == "curiosity"}
     assert sorted(by_group) == sorted(g.label for g in long.groups())
@@ -543,24 +545,34 @@ def test_full_length_evidence_sets_fewer_runs_beside_all_the_committed_ones(resu
 
 def test_full_length_evidence_keeps_what_the_file_holds_of_other_presets():
     module = _full_length_module()
-    sweep = lambda preset: {"preset": preset, "sweep": preset}  # noqa: E731
-    row = lambda claim, *presets: {"claim": claim, "verdict": claim + "".join(presets), **(  # noqa: E731
-        {"presets": list(presets)} if presets else {})}
+    # An entry written before entries recorded their platform has its machine's.
+    sweep = lambda preset, platform="cpu": {"preset": preset, "sweep": preset, "device": {"platform": platform}}  # noqa: E731
+    row = lambda claim, *presets, on="cpu": {"claim": claim, "verdict": claim + "".join(presets), **(  # noqa: E731
+        {"presets": list(presets), "on": [on] * len(presets)} if presets else {})}
     assert module.merged(None, {"claims": [], "sweeps": []}) == {"claims": [], "sweeps": []}
-    # A file written before its rows named their presets: they came from its one sweep.
-    old = {"claims": [row("1"), row("15"), row("6a")], "sweeps": [sweep("multi_agent")]}
+    # A file written before its rows named their presets and platforms: they came from its one sweep.
+    old = {"claims": [row("1"), row("15"), row("6a")], "sweeps": [sweep("multi_agent", "gpu")]}
     new = {"claims": [row("1", "single_agent"), row("13", "single_agent")], "sweeps": [sweep("single_agent")]}
     both = module.merged(old, new)
-    assert [(r["claim"], r["presets"]) for r in both["claims"]] == [
-        ("1", ["multi_agent"]), ("1", ["single_agent"]), ("6a", ["multi_agent"]), ("13", ["single_agent"]),
-        ("15", ["multi_agent"])]
+    assert [(r["claim"], r["presets"], r["on"]) for r in both["claims"]] == [
+        ("1", ["multi_agent"], ["gpu"]), ("1", ["single_agent"], ["cpu"]), ("6a", ["multi_agent"], ["gpu"]),
+        ("13", ["single_agent"], ["cpu"]), ("15", ["multi_agent"], ["gpu"])]
     assert [x["preset"] for x in both["sweeps"]] == ["multi_agent", "single_agent"]
-    # Measured anew, a preset's sweep and every row computed from it are replaced.
-    again = module.merged(both, {"claims": [row("2", "multi_agent")], "sweeps": [{**sweep("multi_agent"), "new": 1}]})
+    # The same preset on another platform stands beside it: nothing of the GPU entry is dropped.
+    cpu = module.merged(both, {"claims": [row("1", "multi_agent")], "sweeps": [sweep("multi_agent")]})
+    assert [(r["claim"], r["on"]) for r in cpu["claims"] if r["presets"] == ["multi_agent"]] == [
+        ("1", ["cpu"]), ("1", ["gpu"]), ("6a", ["gpu"]), ("15", ["gpu"])]
+    assert [module.entry_key(x) for x in cpu["sweeps"]] == [
+        ("multi_agent", "cpu"), ("multi_agent", "gpu"), ("single_agent", "cpu")]
+    # Measured anew, an entry's sweep and every row computed from it are replaced.
+    again = module.merged(both, {"claims": [row("2", "multi_agent", on="gpu")],
+                                 "sweeps": [{**sweep("multi_agent", "gpu"), "new": 1}]})
     assert [(r["claim"], r["presets"]) for r in again["claims"]] == [
         ("1", ["single_agent"]), ("2", ["multi_agent"]), ("13", ["single_agent"])]
     assert [x.get("new") for x in again["sweeps"]] == [1, None]
     assert module.merged({"claims": [row("3", "multi_agent", "single_agent")], "sweeps": []}, new)["claims"] == new["claims"]
+    assert module.platform_of([{"platform": "gpu"}, {"platform": "gpu"}]) == "gpu"
+    assert module.platform_of([{"platform": "gpu"}, {"platform": "cpu"}]) == "cpu+gpu"
 
 
 def test_full_length_evidence_refuses_to_drop_runs_the_file_holds(tiny_sweep, tmp_path, capsys, monkeypatch):
@@ -568,20 +580,25 @@ def test_full_length_evidence_refuses_to_drop_runs_the_file_holds(tiny_sweep, tm
     the file holds of that preset are refused before anything is reduced, the file left as it is."""
     module = _full_length_module()
     sweep = an.load(tiny_sweep)
-    preset = next(iter(module.stands_for(an.assign_presets([sweep]))))
+    key = next(iter(module.stands_for(an.assign_presets([sweep]))))
+    preset, platform = key
+    assert platform == "cpu"
     counts = {g.label: len(g.indices) for g in sweep.groups()}
     first = next(iter(counts))
-    entry = lambda extra: {"preset": preset, "sweep": "held", "curves": {"groups": {  # noqa: E731
+    entry = lambda extra: {"preset": preset, "platform": platform, "sweep": "held", "curves": {"groups": {  # noqa: E731
         label: list(range(n + (extra if label == first else 0))) for label, n in counts.items()}}}
     # As many runs of every policy as the file holds, or more: nothing is lost.
     for extra in (0, -1):
-        assert module.lost_runs({"claims": [], "sweeps": [entry(extra)]}, {preset: sweep}) == []
-    assert module.lost_runs(None, {preset: sweep}) == []
-    assert module.lost_runs({"claims": [], "sweeps": [{**entry(1), "preset": "another"}]}, {preset: sweep}) == []
+        assert module.lost_runs({"claims": [], "sweeps": [entry(extra)]}, {key: sweep}) == []
+    assert module.lost_runs(None, {key: sweep}) == []
+    assert module.lost_runs({"claims": [], "sweeps": [{**entry(1), "preset": "another"}]}, {key: sweep}) == []
+    # The preset on another platform is another entry, which the file keeps beside the new one.
+    assert module.lost_runs({"claims": [], "sweeps": [{**entry(1), "platform": "gpu"}]}, {key: sweep}) == []
     # One run more of the first policy in the file, and a policy the sweep lacks.
     held = {**entry(1), "curves": {"groups": {**entry(1)["curves"]["groups"], "UCB (c=9)": [0, 1]}}}
-    assert module.lost_runs({"claims": [], "sweeps": [held]}, {preset: sweep}) == [
-        f"{preset} (`held`; {first}: {counts[first] + 1} runs against {counts[first]}, UCB (c=9): 2 runs against 0)"]
+    assert module.lost_runs({"claims": [], "sweeps": [held]}, {key: sweep}) == [
+        f"{preset} on CPU (`held`; {first}: {counts[first] + 1} runs against {counts[first]}, "
+        "UCB (c=9): 2 runs against 0)"]
     out = tmp_path / "full_length.json"
     out.write_text(json.dumps({"claims": [], "sweeps": [held]}))
     before = out.read_text()
@@ -670,8 +687,13 @@ def test_full_length_evidence_refuses_bad_command_lines(tiny_sweep, tmp_path, ca
 
 def test_a_side_experiment_stands_for_its_preset_at_the_full_length():
     module = _full_length_module()
-    s, t = types.SimpleNamespace(name="a"), types.SimpleNamespace(name="b")
-    assert module.stands_for({"multi_agent.full_length": s, "single_agent": t}) == {"multi_agent": s, "single_agent": t}
+    on = lambda name, platform: types.SimpleNamespace(name=name, manifest={"device": {"platform": platform}})  # noqa: E731
+    s, t, g = on("a", "cpu"), on("b", "cpu"), on("main", "gpu")
+    assert module.stands_for({"multi_agent.full_length": s, "single_agent": t}) == {
+        ("multi_agent", "cpu"): s, ("single_agent", "cpu"): t}
+    # The main job on a GPU and some of its runs again on a CPU: two entries, not one merged sweep.
+    assert module.stands_for({"multi_agent": g, "multi_agent.full_length_ucb": s}) == {
+        ("multi_agent", "gpu"): g, ("multi_agent", "cpu"): s}
 
 
 def test_sweeps_of_one_presets_different_policies_stand_for_it_together(tiny_sweep, tmp_path, monkeypatch):
@@ -692,8 +714,8 @@ def test_sweeps_of_one_presets_different_policies_stand_for_it_together(tiny_swe
         manifest["command"] += f" out={name}"  # each part its own command
         (path / "manifest.json").write_text(json.dumps(manifest))
         parts[name] = an.load(path)
-    [(preset, both)] = module.stands_for(an.assign_presets(parts)).items()
-    assert preset == "multi_agent" and both.name == "multi_agent.full_length.seeds-0-1 + multi_agent.full_length_ucb"
+    [(key, both)] = module.stands_for(an.assign_presets(parts)).items()
+    assert key == ("multi_agent", "cpu") and both.name == "multi_agent.full_length.seeds-0-1 + multi_agent.full_length_ucb"
     assert [p.name for p in both.parts] == list(parts)  # the sweeps read from disk, seed parts and all
     assert [p["path"] for p in both.manifest["parts"]] == [str(tmp_path / name) for name in parts]
     assert [g.policy for g in both.groups()] == ["eps", "ucb"] and both.n_runs == len(eps) + len(ucb)
@@ -710,16 +732,17 @@ def test_sweeps_of_one_presets_different_policies_stand_for_it_together(tiny_swe
         module.stands_for({**parts, "multi_agent.again": again})
 
 
-def _late_entry(preset: str, agents: int, late: dict, steps: int = 80_000) -> dict:
-    """A full-length entry of `preset` whose runs' last-steps measures are `late` ({group:
-    {measure: per-run list}})."""
+def _late_entry(preset: str, agents: int, late: dict, steps: int = 80_000, platform: str = "cpu") -> dict:
+    """A full-length entry of `preset` on `platform` whose runs' last-steps measures are `late`
+    ({group: {measure: per-run list}})."""
     halves = [{"group": g, "measure": m, "what": m, "second": v} for g, ms in late.items() for m, v in ms.items()]
     first = np.cumsum([0] + [len(ms["curiosity"]) for ms in late.values()])
     groups = {g: list(range(a, b)) for g, a, b in zip(late, first[:-1], first[1:])}
     bins = list(range(1000, steps + 1, 1000))
     runs = [[c] * len(bins) for ms in late.values() for c in ms["curiosity"]]  # flat at the late level
-    return {"preset": preset, "sweep": preset + ".long", "agents": agents, "steps": steps, "late_steps": 10_000,
-            "halves": halves, "device": {"platform": "cpu", "cpu": "X"},
+    device = {"platform": "cpu", "cpu": "X"} if platform == "cpu" else {"platform": platform, "kind": "NVIDIA Z"}
+    return {"preset": preset, "platform": platform, "sweep": f"{preset}.long_{platform}", "agents": agents,
+            "steps": steps, "late_steps": 10_000, "halves": halves, "device": device,
             "curves": {"bin_steps": 1000, "groups": groups, "long": {"steps": bins, "runs": runs}}}
 
 
@@ -733,50 +756,67 @@ def test_one_agent_against_two_at_the_full_length_on_planted_entries(results, tm
     high = {"curiosity": spread(0.5, 8, 0.01), "vae_loss": spread(110, 8, 1), "recon": spread(80, 8, 1)}
     one = _late_entry("single_agent", 1, {eps: low, ucb: low})
     two = _late_entry("multi_agent", 2, {eps: high, ucb: high, "Boltzmann (T=1.5)": high})
-    a = module.one_against_two([two, one])
+    [a] = module.one_against_two([two, one])
+    assert a["on"] == ["cpu", "cpu"]
     assert [(r["group"], r["measure"]) for r in a["rows"]] == [(g, m) for g in (eps, ucb) for m in module.AGENT_MEASURES]
     r = a["rows"][0]
     assert r["one"] == low["curiosity"] and r["two"] == high["curiosity"] and r["diff"] == pytest.approx(0.1)
     assert a["claim"]["claim"] == "3" and a["claim"]["verdict"] == "holds (both Welch tests p < 0.05, multi > single)"
     assert "mean over steps 70,000-80,000" in a["claim"]["statistic"] and a["claim"]["presets"] == ["multi_agent",
                                                                                                    "single_agent"]
-    swapped = module.one_against_two([_late_entry("single_agent", 1, {ucb: high}), _late_entry("multi_agent", 2, {ucb: low})])
+    [swapped] = module.one_against_two([_late_entry("single_agent", 1, {ucb: high}), _late_entry("multi_agent", 2, {ucb: low})])
     assert swapped["claim"]["verdict"].startswith("does not hold: curiosity not significantly higher with two agents")
-    assert module.one_against_two([one, {**two, "steps": 40_000}]) is None
-    assert module.one_against_two([one]) is None
-    assert module.one_against_two([_late_entry("single_agent", 1, {eps: low}), two])["claim"] is None  # no UCB: no row
+    assert module.one_against_two([one, {**two, "steps": 40_000}]) == []
+    assert module.one_against_two([one]) == []
+    assert module.one_against_two([_late_entry("single_agent", 1, {eps: low}), two])[0]["claim"] is None  # no UCB: no row
     # In the file: claim 3's row replaces one computed before from the same two presets, and the
     # page sets the table out.
     old = {"claim": "3", "verdict": "stale", "presets": ["multi_agent", "single_agent"]}
     doc = module.with_one_against_two({"claims": [{"claim": "13", "presets": ["single_agent"]}, old],
                                        "sweeps": [two, one]})
     assert [r["claim"] for r in doc["claims"]] == ["3", "13"] and doc["claims"][0]["verdict"].startswith("holds")
-    assert set(doc["agents"]) == {"one", "two", "steps", "late_steps", "rows"}
-    lines = results._one_against_two(doc["agents"], {x["sweep"]: x for x in doc["sweeps"]})
+    [table] = doc["one_against_two"]
+    assert set(table) == {"one", "two", "on", "steps", "late_steps", "rows"}
+    lines = results._one_against_two(table, {x["sweep"]: x for x in doc["sweeps"]})
     assert "Holm's correction over the table's 6 tests" in lines[0] and "different machines" not in lines[0]
     assert f"| {ucb} | curiosity | 0.4 (3) | 0.5 (8) | +0.1 | {results._p(a['rows'][3]['p'])} " \
            f"| {results._p(a['rows'][3]['p_holm'])} |" in lines
-    assert f"![{results.ONE_AGAINST_TWO}](figures/results/{results.ONE_AGAINST_TWO}.png)" in lines
     results._one_against_two_figure(doc, tmp_path)  # save_figure refuses a panel with nothing drawn
     assert (tmp_path / f"{results.ONE_AGAINST_TWO}.png").is_file()
-    assert "agents" not in module.with_one_against_two({"claims": [], "sweeps": [one]})
+    assert "one_against_two" not in module.with_one_against_two({"claims": [], "sweeps": [one]})
+    # Two agents on a GPU (all the policies) and on a CPU (UCB, fewer seeds): two pairs, the one on
+    # one platform first, each with its claim 3 row; the figure draws every sweep where it ran.
+    gpu = _late_entry("multi_agent", 2, {eps: high, ucb: high}, platform="gpu")
+    few = _late_entry("multi_agent", 2, {ucb: {k: v[:3] for k, v in low.items()}})
+    doc = module.with_one_against_two({"claims": [old], "sweeps": [gpu, one, few]})
+    assert [(t["two"], t["on"]) for t in doc["one_against_two"]] == [
+        (few["sweep"], ["cpu", "cpu"]), (gpu["sweep"], ["cpu", "gpu"])]
+    assert [(r["claim"], r["on"]) for r in doc["claims"]] == [("3", ["cpu", "cpu"]), ("3", ["gpu", "cpu"])]
+    assert "(CPU) vs multi_agent.long_gpu (GPU)" in doc["claims"][1]["statistic"]
+    assert doc["claims"][0]["verdict"].startswith("does not hold") and doc["claims"][1]["verdict"].startswith("holds")
+    lines = results._one_against_two(doc["one_against_two"][1], {x["sweep"]: x for x in doc["sweeps"]})
+    assert "on one NVIDIA Z" in lines[0] and "different machines" in lines[0]
+    results._one_against_two_figure(doc, tmp_path / "three")
+    assert (tmp_path / "three" / f"{results.ONE_AGAINST_TWO}.png").is_file()
     # Where both entries keep their committed runs' measures at one length, the same comparison
     # on those runs (planted the other way round: one agent the higher) follows the table.
     def committed(e, late, steps=40_000):
         return {**e, "committed": {"sweep": e["preset"], "steps": steps, "devices": [{"platform": "cpu", "cpu": "Y"}]},
                 "platforms": [{"group": g, "measure": m, "what": m, "short": v} for g, ms in late.items() for m, v in ms.items()]}
-    c = module.one_against_two([committed(one, {eps: high, ucb: high}), committed(two, {eps: low, ucb: low})])["committed"]
+    c = module.one_against_two([committed(one, {eps: high, ucb: high}), committed(two, {eps: low, ucb: low})])[0]["committed"]
     assert (c["one"], c["two"], c["steps"]) == ("single_agent", "multi_agent", 40_000)
     assert [(r["group"], r["measure"]) for r in c["rows"]] == [(r["group"], r["measure"]) for r in a["rows"]]
     assert c["rows"][0]["one"] == high["curiosity"] and c["rows"][0]["diff"] == pytest.approx(-0.1)
-    assert "committed" not in module.one_against_two([committed(one, {ucb: high}), committed(two, {ucb: low}, 20_000)])
+    assert "committed" not in module.one_against_two([committed(one, {ucb: high}), committed(two, {ucb: low}, 20_000)])[0]
     doc = module.with_one_against_two({"claims": [], "sweeps": [committed(two, {eps: low, ucb: low}),
                                                                 committed(one, {eps: high, ucb: high})]})
-    lines = results._one_against_two(doc["agents"], {x["sweep"]: x for x in doc["sweeps"]})
+    lines = results._one_against_two(doc["one_against_two"][0], {x["sweep"]: x for x in doc["sweeps"]})
     at = lines.index("The same over the committed runs' last 10,000 steps (steps 30,000-40,000): `single_agent` on a "
                      "CPU (Y) against `multi_agent` on a CPU (Y), all their seeds, Holm's correction over the table's "
                      "6 tests:")
     assert lines[at + 4].startswith(f"| {eps} | curiosity | 0.5 (8) | 0.4 (3) | -0.1 |")  # high has 8 runs, low 3
+    assert not any(line.startswith("The same over the committed runs") for line in results._one_against_two(
+        doc["one_against_two"][0], {x["sweep"]: x for x in doc["sweeps"]}, committed=False))
 
 
 # ---------------------------------------------------------------------- snapshots of tiny sweeps
