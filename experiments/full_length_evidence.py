@@ -38,7 +38,10 @@ side by side:
   against each other over their last 10,000 steps (`one_against_two`), claim 3 at the full
   length, whose row joins the claims (pairs on one platform first); and the same over their
   committed runs' last 10,000 steps, where the two sides may share their machines when the
-  full-length sweeps do not.
+  full-length sweeps do not;
+- `across_platforms`: for each preset the file holds on a CPU and on a GPU at one length, the two
+  entries' runs over their last 10,000 steps, the GPU's against the CPU's (`across_platforms`):
+  how far the machine alone moves the measures at the full length.
 
 Per sweep (`sweeps`), `platforms`, `halves` and `curves`. It refuses a sweep that fits no
 preset, whose runs were set up differently (`analysis.run_config`; how the runs are looped over
@@ -321,19 +324,53 @@ def _two_against_one(one: dict, two: dict, side: str) -> list:
     """Rows of `one_against_two`: for each policy both {(group, measure): row} dicts hold (in
     `one`'s order) and each of AGENT_MEASURES, the per-run numbers `row[side]` of two agents
     against one, Welch's two-sided t-test, and Holm's correction over the rows' tests."""
+    return _against(one, two, side, ("one", "two"), AGENT_MEASURES)
+
+
+def _against(left: dict, right: dict, side: str, names: tuple[str, str], measures) -> list:
+    """For each policy both {(group, measure): row} dicts hold (in `left`'s order) and each of
+    `measures` both hold, the per-run numbers `row[side]` of each as `names`, the difference
+    right minus left with Welch's two-sided t-test, and Holm's correction over the rows' tests."""
     from mjx_curio import analysis as an
 
-    groups = [g for g in dict.fromkeys(k[0] for k in one) if any(k[0] == g for k in two)]
+    groups = [g for g in dict.fromkeys(k[0] for k in left) if any(k[0] == g for k in right)]
     rows = []
     for g in groups:
-        for key in AGENT_MEASURES:
-            x, y = one[(g, key)], two[(g, key)]
+        for key in measures:
+            if (g, key) not in left or (g, key) not in right:
+                continue
+            x, y = left[(g, key)], right[(g, key)]
             t = an.welch_t(np.asarray(y[side], float), np.asarray(x[side], float))
-            rows.append({"group": g, "measure": key, "what": x["what"], "one": x[side], "two": y[side],
+            rows.append({"group": g, "measure": key, "what": x["what"], names[0]: x[side], names[1]: y[side],
                          "diff": _num(t["diff"]), "p": _num(t["p"]), "t": _num(t["t"])})
     for row, q in zip(rows, holm([r["p"] for r in rows])):
         row["p_holm"] = q
     return rows
+
+
+def across_platforms(sweeps: list) -> list[dict]:
+    """Each preset the file holds on a CPU and on a GPU at one length: the two entries' runs over
+    their last LATE_STEPS (`halves`, each entry's own numbers), per policy both ran and measure
+    (the late curiosity, the VAE loss per image, its reconstruction term and object contacts),
+    the GPU's against the CPU's, Welch's two-sided t-test and Holm's correction over the table's
+    tests: how far the machine alone moves the measures at the full length, where each entry's
+    `platforms` table answers it over the committed runs' steps.
+
+    [{"preset", "cpu", "gpu": the sweeps' names, "steps", "late_steps", "rows": [{"group",
+    "measure", "what", "cpu", "gpu" (per run), "diff" (GPU - CPU), "t", "p", "p_holm"}]}]."""
+    from mjx_curio.analysis.walls import MEASURES
+
+    late = lambda e: {(h["group"], h["measure"]): h for h in e["halves"]}  # noqa: E731
+    on = {entry_key(x): x for x in sweeps}
+    out = []
+    for (preset, platform), cpu in sorted(on.items()):
+        gpu = on.get((preset, "gpu"))
+        if platform != "cpu" or gpu is None or (cpu["steps"], cpu["late_steps"]) != (gpu["steps"], gpu["late_steps"]):
+            continue
+        rows = _against(late(cpu), late(gpu), "second", ("cpu", "gpu"), [key for key, _, _ in MEASURES])
+        out.append({"preset": preset, "cpu": cpu["sweep"], "gpu": gpu["sweep"], "steps": cpu["steps"],
+                    "late_steps": cpu["late_steps"], "rows": rows})
+    return out
 
 
 def _committed_one_against_two(one: dict, two: dict) -> dict | None:
@@ -358,15 +395,19 @@ def _nan(v) -> float:
 def with_one_against_two(doc: dict) -> dict:
     """`doc` (`merged`) with `one_against_two` of its sweeps: the `one_against_two` tables, and
     their claim 3 rows among the claims in place of those computed before from the two presets (a
-    file written before it kept several pairs had one table, as `agents`)."""
+    file written before it kept several pairs had one table, as `agents`); and the
+    `across_platforms` tables of its presets on two platforms."""
     both = sorted([ONE, TWO])
     claims = [r for r in doc["claims"] if not (r["claim"] == "3" and sorted(r.get("presets", [])) == both)]
-    out = {k: v for k, v in doc.items() if k not in ("agents", "one_against_two")}
+    out = {k: v for k, v in doc.items() if k not in ("agents", "one_against_two", "across_platforms")}
     tables = one_against_two(doc["sweeps"])
     claims += [t["claim"] for t in tables if t["claim"]]
     if tables:
         out["one_against_two"] = [{k: v for k, v in t.items() if k != "claim"} for t in tables]
     out["claims"] = _in_order(claims)
+    platforms = across_platforms(doc["sweeps"])
+    if platforms:
+        out["across_platforms"] = platforms
     return out
 
 

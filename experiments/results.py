@@ -459,6 +459,8 @@ def full_length_block(path: pathlib.Path = FULL_LENGTH) -> str:
         lines += [row for x in e["sweeps"] for row in _agent_contact_order_row(x)]
     for x in e["sweeps"]:
         lines += ["", *_full_length_sweep(x)]
+    for t in e.get("across_platforms", []):
+        lines += ["", *_across_platforms(t, {x["sweep"]: x for x in e["sweeps"]})]
     shown = set()  # the committed runs' table once: every pair of the same two presets shares it
     for a in e.get("one_against_two", []):
         c = a.get("committed")
@@ -511,6 +513,20 @@ def _one_against_two(a: dict, sweeps: dict, committed: bool = True) -> list[str]
             + ("" if same else "; the two ran on different machines, and each sweep's first table above says "
                "how far the machine alone moves these measures") + ":", "",
             *table(a["rows"]), *([""] + below if below else [])]
+
+
+def _across_platforms(t: dict, sweeps: dict) -> list[str]:
+    """A preset on a CPU and on a GPU at the full length (a table of `across_platforms` in
+    full_length_evidence.py): the measures over the last steps, per policy both ran."""
+    cpu, gpu = _device(sweeps[t["cpu"]]["device"]), _device(sweeps[t["gpu"]]["device"])
+    n = sum(r["p"] is not None for r in t["rows"])
+    return [f"{t['preset']} on both platforms at the full length: `{t['gpu']}` on {gpu} against `{t['cpu']}` on "
+            f"{cpu}, the curiosity, the VAE loss per image, its reconstruction term and object contacts per 1,000 "
+            f"agent-steps over steps {t['steps'] - t['late_steps']:,}-{t['steps']:,}, per policy both ran; means "
+            "over seeds (how many in brackets), the difference GPU minus CPU, Welch's two-sided t-test, and Holm's "
+            f"correction over the table's {n} tests:", "",
+            f"| policy | measure | {cpu} | {gpu} | difference | p | p (Holm) |", "|---|---|---|---|---|---|---|",
+            *_measure_rows(t["rows"], "cpu", "gpu", counts=True)]
 
 
 def _measure_rows(entries: list, left: str, right: str, counts: bool = False) -> list[str]:

@@ -410,6 +410,12 @@ def test_the_committed_full_length_numbers_are_what_their_runs_give(results):
     assert len({(e["preset"], e["platform"]) for e in doc["sweeps"]}) == len(doc["sweeps"])  # one entry each
     for a in doc.get("one_against_two", []):
         _check_one_against_two(doc, a, stats)
+    by = {x["sweep"]: x for x in doc["sweeps"]}
+    for t in doc.get("across_platforms", []):  # each side's per-run numbers its own entry's last steps
+        assert (by[t["cpu"]]["platform"], by[t["gpu"]]["platform"]) == ("cpu", "gpu")
+        assert by[t["cpu"]]["preset"] == by[t["gpu"]]["preset"] == t["preset"]
+        late = {w: {(h["group"], h["measure"]): h["second"] for h in by[t[w]]["halves"]} for w in ("cpu", "gpu")}
+        _check_two_against_one(t["rows"], late, stats, ("cpu", "gpu"))
 
 
 def _check_one_against_two(doc: dict, a: dict, stats):
@@ -434,13 +440,15 @@ def _check_one_against_two(doc: dict, a: dict, stats):
         assert row["verdict"].startswith("holds" if holds else "does not hold")
 
 
-def _check_two_against_one(rows: list, runs: dict, stats):
-    """Each row's per-run numbers are `runs`' ({"one", "two": {(group, measure): list}}), its
-    Welch test SciPy's, and Holm's correction over the rows recomputed."""
+def _check_two_against_one(rows: list, runs: dict, stats, names=("one", "two")):
+    """Each row's per-run numbers are `runs`' ({"one", "two": {(group, measure): list}}, or the
+    sides `names`), its Welch test SciPy's (the second side against the first), and Holm's
+    correction over the rows recomputed."""
     ps = []
+    a, b = names
     for r in rows:
-        assert r["one"] == runs["one"][(r["group"], r["measure"])] and r["two"] == runs["two"][(r["group"], r["measure"])]
-        want = stats.ttest_ind(np.array(r["two"]), np.array(r["one"]), equal_var=False)
+        assert r[a] == runs[a][(r["group"], r["measure"])] and r[b] == runs[b][(r["group"], r["measure"])]
+        want = stats.ttest_ind(np.array(r[b]), np.array(r[a]), equal_var=False)
         assert r["p"] == pytest.approx(want.pvalue, rel=1e-6) and r["t"] == pytest.approx(want.statistic, rel=1e-6)
         ps.append(r["p"])
     order = np.argsort(ps)
@@ -798,6 +806,17 @@ def test_one_agent_against_two_at_the_full_length_on_planted_entries(results, tm
     assert "on one NVIDIA Z" in lines[0] and "different machines" in lines[0]
     results._one_against_two_figure(doc, tmp_path / "three")
     assert (tmp_path / "three" / f"{results.ONE_AGAINST_TWO}.png").is_file()
+    # The two-agent preset on both platforms: its GPU runs against its CPU ones over the same last
+    # steps, per policy both ran (UCB) and measure both entries keep.
+    [t] = doc["across_platforms"]
+    assert (t["preset"], t["cpu"], t["gpu"]) == ("multi_agent", few["sweep"], gpu["sweep"])
+    assert [(r["group"], r["measure"]) for r in t["rows"]] == [(ucb, m) for m in module.AGENT_MEASURES]
+    assert t["rows"][0]["cpu"] == low["curiosity"][:3] and t["rows"][0]["gpu"] == high["curiosity"]
+    assert t["rows"][0]["diff"] == pytest.approx(np.mean(high["curiosity"]) - np.mean(low["curiosity"][:3]))
+    lines = results._across_platforms(t, {x["sweep"]: x for x in doc["sweeps"]})
+    assert "`multi_agent.long_gpu` on one NVIDIA Z against `multi_agent.long_cpu` on a CPU (X)" in lines[0]
+    assert "the table's 3 tests" in lines[0] and lines[4].startswith(f"| {ucb} | curiosity | ")
+    assert "across_platforms" not in module.with_one_against_two({"claims": [], "sweeps": [one, few]})
     # Where both entries keep their committed runs' measures at one length, the same comparison
     # on those runs (planted the other way round: one agent the higher) follows the table.
     def committed(e, late, steps=40_000):
