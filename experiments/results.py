@@ -498,7 +498,7 @@ def _one_against_two(a: dict, sweeps: dict, committed: bool = True) -> list[str]
         return ["| policy | measure | one agent | two agents | difference | p | p (Holm) |", "|---|---|---|---|---|---|---|",
                 *_measure_rows(entries, "one", "two", counts=True)]
 
-    same = one["device"] == two["device"]
+    same = _device(one["device"]) == _device(two["device"])  # the machines as the reader sees them named
     c = a.get("committed") if committed else None
     below = [] if not c else [
         f"The same over the committed runs' last {a['late_steps']:,} steps (steps {c['steps'] - a['late_steps']:,}-"
@@ -510,8 +510,9 @@ def _one_against_two(a: dict, sweeps: dict, committed: bool = True) -> list[str]
             f"loss per image and its reconstruction term over steps {lo:,}-{hi:,}, per policy both ran (the claim's "
             "verdict is on UCB's, the paper's choice); means over seeds (how many in brackets), the difference two "
             f"agents minus one, Welch's two-sided t-test, and Holm's correction over the table's {n} tests"
-            + ("" if same else "; the two ran on different machines, and each sweep's first table above says "
-               "how far the machine alone moves these measures") + ":", "",
+            + ("" if same else "; the two ran on different machines, and each sweep's first table above (and, "
+               "where a preset ran on both, its table on both platforms) says how far the machine alone moves "
+               "these measures") + ":", "",
             *table(a["rows"]), *([""] + below if below else [])]
 
 
