@@ -608,10 +608,11 @@ def _agent_contact_order_row(e: dict) -> list[str]:
     from mjx_curio.analysis.claims import AGENT_PHASE_STEPS, agent_contact_order, claim_boltzmann_agents_meet
 
     cv = e["curves"]
-    if e["agents"] < 2 or cv["long"]["steps"][-1] < AGENT_PHASE_STEPS:
-        return []
+    policies = _policy_groups(cv["groups"])
+    if e["agents"] < 2 or cv["long"]["steps"][-1] < AGENT_PHASE_STEPS or not {"eps", "boltzmann", "ucb"} <= set(policies):
+        return []  # the claim sets Boltzmann against ε-greedy, each as a share of UCB: a sweep of all three
     totals = np.asarray([r[-1] for r in cv["long"]["agent_contacts"]], float)
-    d = agent_contact_order({p: totals[idx] for p, idx in _policy_groups(cv["groups"]).items()})
+    d = agent_contact_order({p: totals[idx] for p, idx in policies.items()})
     claim = claim_boltzmann_agents_meet({}).claim  # its wording; with no sweep it tests nothing
     return [f"| 15 | {claim} | {e['sweep']} (from its cumulative contact curves): {d['text']} | {d['verdict']} |"]
 

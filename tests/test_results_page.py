@@ -667,6 +667,8 @@ def test_claim_15_row_of_a_full_length_sweep_from_planted_cumulative_curves(resu
     assert "ε-greedy 4 [" in row and "Boltzmann 50 [" in row and "(50 % of UCB's)" in row
     assert row.endswith("| holds (Welch p < 0.05, Boltzmann > ε-greedy) |")
     assert results._agent_contact_order_row({**e, "agents": 1}) == []
+    ucb_only = {**e, "curves": {**e["curves"], "groups": {"UCB (c=1)": [6, 7, 8]}}}  # a sweep of one policy
+    assert results._agent_contact_order_row(ucb_only) == []
     short = {**e, "curves": {"groups": labels, "long": {"steps": steps[:40], "agent_contacts": [c[:40] for c in curves]}}}
     assert results._agent_contact_order_row(short) == []
 
