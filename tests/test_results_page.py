@@ -32,6 +32,12 @@ def results():
     sys.modules.pop(name, None)
 
 
+@pytest.fixture(scope="module")
+def full_length_page(results):
+    """experiments/full_length_page.py, the page's full-length block, as results.py imports it."""
+    return sys.modules["full_length_page"]
+
+
 # ---------------------------------------------------------------------- the committed page
 
 
@@ -398,13 +404,13 @@ def _evidence_on_tiny_sweep(name: str, tiny_sweep, tmp_path, capsys):
     return module, module.evidence(str(tiny_sweep)), an.load(tiny_sweep)
 
 
-def test_the_committed_full_length_numbers_are_what_their_runs_give(results):
+def test_the_committed_full_length_numbers_are_what_their_runs_give(full_length_page):
     # The tests' p-values against SciPy's, from the per-run numbers the file keeps; Holm's
     # correction recomputed; the verdicts' sweep is the main job's shape.
     stats = pytest.importorskip("scipy.stats")
-    if not results.FULL_LENGTH.exists():
+    if not full_length_page.FULL_LENGTH.exists():
         pytest.skip("no full-length sweep measured")
-    doc = json.loads(results.FULL_LENGTH.read_text())
+    doc = json.loads(full_length_page.FULL_LENGTH.read_text())
     for e in doc["sweeps"]:
         _check_full_length_sweep(e, stats)
     assert len({(e["preset"], e["platform"]) for e in doc["sweeps"]}) == len(doc["sweeps"])  # one entry each
@@ -479,7 +485,7 @@ def test_holm_on_planted_p_values():
     assert module.holm([]) == []
 
 
-def test_full_length_evidence_on_the_tiny_sweep(results, tiny_sweep, tiny_single_sweep, tmp_path, monkeypatch):
+def test_full_length_evidence_on_the_tiny_sweep(full_length_page, tiny_sweep, tiny_single_sweep, tmp_path, monkeypatch):
     """The tiny sweep's 200 steps as the long sweep, its first 100 as the committed one: the same
     runs over the same steps differ by nothing, and the halves' paired test is Student's t on
     each run's own numbers."""
@@ -511,20 +517,20 @@ def test_full_length_evidence_on_the_tiny_sweep(results, tiny_sweep, tiny_single
         assert [r[-1] for r in e["curves"]["long"][key]] == counts.sum(axis=1).tolist(), key  # summed from the start
     path = tmp_path / "full_length.json"
     path.write_text(json.dumps(whole))
-    block = results.full_length_block(path)
+    block = full_length_page.full_length_block(path)
     assert block.count("| curiosity |") == 2 * len(long.groups())
     assert "Holm's correction over the table's" in block and "full_length_multi_agent_cpu_curiosity.png" in block
-    results.full_length_figure(path, out=tmp_path / "figures")  # save_figure refuses a panel with nothing drawn
+    full_length_page.full_length_figure(path, tmp_path / "figures", dpi=40)  # save_figure refuses a panel with nothing drawn
     for name in ("full_length_multi_agent_cpu_curiosity", "full_length_multi_agent_cpu_interactions"):
         assert (tmp_path / "figures" / f"{name}.png").is_file(), name
     with pytest.raises(ValueError, match="other settings"):
         module.sweep_evidence("multi_agent", long, an.load(tiny_single_sweep))
     with pytest.raises(ValueError, match="no more than"):
         module.sweep_evidence("multi_agent", short, long)
-    assert results.full_length_block(tmp_path / "missing.json").startswith("No sweep of the paper's full length")
+    assert full_length_page.full_length_block(tmp_path / "missing.json").startswith("No sweep of the paper's full length")
 
 
-def test_full_length_evidence_sets_fewer_runs_beside_all_the_committed_ones(results, tiny_sweep, tmp_path, monkeypatch):
+def test_full_length_evidence_sets_fewer_runs_beside_all_the_committed_ones(full_length_page, tiny_sweep, tmp_path, monkeypatch):
     """A full-length sweep of some of the committed policies and seeds (on a CPU, fig. 8's
     ε-greedy runs alone) is compared with every committed run of its settings; one with a run the
     committed ones lack is refused."""
@@ -543,7 +549,7 @@ def test_full_length_evidence_sets_fewer_runs_beside_all_the_committed_ones(resu
     assert len(by_group[ucb_label]["long"]) == 1 and len(by_group[ucb_label]["short"]) == len(ucb)
     eps_label = long.groups("eps")[0].label
     assert by_group[eps_label]["long"] == by_group[eps_label]["short"]  # the same runs over the same steps
-    assert results._same_runs(e) == f"The same settings ({eps_label}: {len(eps)} against {len(eps)} seeds; " \
+    assert full_length_page._same_runs(e) == f"The same settings ({eps_label}: {len(eps)} against {len(eps)} seeds; " \
                                     f"{ucb_label}: 1 against {len(ucb)} seeds)"
     all_but_one = [i for i in range(whole.n_runs) if i != ucb[1]]
     with pytest.raises(ValueError, match=r"has runs the committed runs .* lack \(ucb seed 1\)"):
@@ -617,7 +623,7 @@ def test_full_length_evidence_refuses_to_drop_runs_the_file_holds(tiny_sweep, tm
     assert "move the file aside" in err and out.read_text() == before
 
 
-def test_contact_timing_of_a_full_length_sweep_from_planted_cumulative_curves(results):
+def test_contact_timing_of_a_full_length_sweep_from_planted_cumulative_curves(full_length_page):
     # 80 bins of 1,000 steps. "steady": 2 contact steps a bin before step 25,000 and 4 + the run's
     # index after; "stops": 6 a bin up to step 30,000, none after, in two runs of three.
     steps = list(range(1000, 80_001, 1000))
@@ -629,7 +635,7 @@ def test_contact_timing_of_a_full_length_sweep_from_planted_cumulative_curves(re
     cum = np.cumsum(per_bin, axis=1).tolist()
     e = {"curves": {"bin_steps": 1000, "groups": {"steady": [0, 1, 2], "stops": [3, 4, 5]},
                     "long": {"steps": steps, "object_contacts": cum}}}
-    lines = results._contact_timing(e)
+    lines = full_length_page._contact_timing(e)
     rows = {r.split(" | ")[0].strip("| "): r.split(" | ") for r in lines if r.startswith(("| steady", "| stops"))}
     assert rows["steady"][1:3] == ["2.0", "5.0"]  # before, after: 4, 5, 6 a bin
     assert rows["steady"][3] == "3.0 [0.5, 5.5]"  # 2, 3, 4: mean 3, t(0.975, 2) x 1 / sqrt(3)
@@ -640,7 +646,7 @@ def test_contact_timing_of_a_full_length_sweep_from_planted_cumulative_curves(re
     # Too short a run for the marks: no table.
     short = {"curves": {"bin_steps": 1000, "groups": {"steady": [0]},
                         "long": {"steps": steps[:30], "object_contacts": [c[:30] for c in cum[:1]]}}}
-    assert results._contact_timing(short) == []
+    assert full_length_page._contact_timing(short) == []
 
 
 def test_the_paper_readings_figure_has_a_panel_for_each_loaded_preset(results, tmp_path):
@@ -654,7 +660,7 @@ def test_the_paper_readings_figure_has_a_panel_for_each_loaded_preset(results, t
     assert not (tmp_path / "nothing").exists()
 
 
-def test_claim_15_row_of_a_full_length_sweep_from_planted_cumulative_curves(results):
+def test_claim_15_row_of_a_full_length_sweep_from_planted_cumulative_curves(full_length_page):
     # A full_length.json written before claim 15 existed: its row comes from the curves' last
     # points, each run's agent-agent contact steps, and says what the claim itself would.
     steps = list(range(1000, 80_001, 1000))
@@ -662,15 +668,15 @@ def test_claim_15_row_of_a_full_length_sweep_from_planted_cumulative_curves(resu
     curves = [np.linspace(0, t, len(steps)).round().tolist() for t in totals]
     labels = {"ε-greedy (ε=0.2)": [0, 1, 2], "Boltzmann (T=1.5)": [3, 4, 5], "UCB (c=1)": [6, 7, 8]}
     e = {"agents": 2, "sweep": "main", "curves": {"groups": labels, "long": {"steps": steps, "agent_contacts": curves}}}
-    [row] = results._agent_contact_order_row(e)
+    [row] = full_length_page._agent_contact_order_row(e)
     assert row.startswith("| 15 | Boltzmann agents touch each other more often than ε-greedy agents")
     assert "ε-greedy 4 [" in row and "Boltzmann 50 [" in row and "(50 % of UCB's)" in row
     assert row.endswith("| holds (Welch p < 0.05, Boltzmann > ε-greedy) |")
-    assert results._agent_contact_order_row({**e, "agents": 1}) == []
+    assert full_length_page._agent_contact_order_row({**e, "agents": 1}) == []
     ucb_only = {**e, "curves": {**e["curves"], "groups": {"UCB (c=1)": [6, 7, 8]}}}  # a sweep of one policy
-    assert results._agent_contact_order_row(ucb_only) == []
+    assert full_length_page._agent_contact_order_row(ucb_only) == []
     short = {**e, "curves": {"groups": labels, "long": {"steps": steps[:40], "agent_contacts": [c[:40] for c in curves]}}}
-    assert results._agent_contact_order_row(short) == []
+    assert full_length_page._agent_contact_order_row(short) == []
 
 
 def test_full_length_evidence_refuses_bad_command_lines(tiny_sweep, tmp_path, capsys, monkeypatch):
@@ -756,7 +762,7 @@ def _late_entry(preset: str, agents: int, late: dict, steps: int = 80_000, platf
             "curves": {"bin_steps": 1000, "groups": groups, "long": {"steps": bins, "runs": runs}}}
 
 
-def test_one_agent_against_two_at_the_full_length_on_planted_entries(results, tmp_path):
+def test_one_agent_against_two_at_the_full_length_on_planted_entries(full_length_page, tmp_path):
     # Two agents planted higher by 0.1 in curiosity and by 10 in the VAE loss, with a spread of
     # 0.01 and 1: claim 3 holds; the same runs the other way round: it does not.
     module = _full_length_module()
@@ -787,12 +793,12 @@ def test_one_agent_against_two_at_the_full_length_on_planted_entries(results, tm
     assert [r["claim"] for r in doc["claims"]] == ["3", "13"] and doc["claims"][0]["verdict"].startswith("holds")
     [table] = doc["one_against_two"]
     assert set(table) == {"one", "two", "on", "steps", "late_steps", "rows"}
-    lines = results._one_against_two(table, {x["sweep"]: x for x in doc["sweeps"]})
+    lines = full_length_page._one_against_two(table, {x["sweep"]: x for x in doc["sweeps"]})
     assert "Holm's correction over the table's 6 tests" in lines[0] and "different machines" not in lines[0]
-    assert f"| {ucb} | curiosity | 0.4 (3) | 0.5 (8) | +0.1 | {results._p(a['rows'][3]['p'])} " \
-           f"| {results._p(a['rows'][3]['p_holm'])} |" in lines
-    results._one_against_two_figure(doc, tmp_path)  # save_figure refuses a panel with nothing drawn
-    assert (tmp_path / f"{results.ONE_AGAINST_TWO}.png").is_file()
+    assert f"| {ucb} | curiosity | 0.4 (3) | 0.5 (8) | +0.1 | {full_length_page._p(a['rows'][3]['p'])} " \
+           f"| {full_length_page._p(a['rows'][3]['p_holm'])} |" in lines
+    full_length_page._one_against_two_figure(doc, tmp_path, dpi=40)  # save_figure refuses a panel with nothing drawn
+    assert (tmp_path / f"{full_length_page.ONE_AGAINST_TWO}.png").is_file()
     assert "one_against_two" not in module.with_one_against_two({"claims": [], "sweeps": [one]})
     # Two agents on a GPU (all the policies) and on a CPU (UCB, fewer seeds): two pairs, the one on
     # one platform first, each with its claim 3 row; the figure draws every sweep where it ran.
@@ -804,10 +810,10 @@ def test_one_agent_against_two_at_the_full_length_on_planted_entries(results, tm
     assert [(r["claim"], r["on"]) for r in doc["claims"]] == [("3", ["cpu", "cpu"]), ("3", ["gpu", "cpu"])]
     assert "(CPU) vs multi_agent.long_gpu (GPU)" in doc["claims"][1]["statistic"]
     assert doc["claims"][0]["verdict"].startswith("does not hold") and doc["claims"][1]["verdict"].startswith("holds")
-    lines = results._one_against_two(doc["one_against_two"][1], {x["sweep"]: x for x in doc["sweeps"]})
+    lines = full_length_page._one_against_two(doc["one_against_two"][1], {x["sweep"]: x for x in doc["sweeps"]})
     assert "on one NVIDIA Z" in lines[0] and "different machines" in lines[0]
-    results._one_against_two_figure(doc, tmp_path / "three")
-    assert (tmp_path / "three" / f"{results.ONE_AGAINST_TWO}.png").is_file()
+    full_length_page._one_against_two_figure(doc, tmp_path / "three", dpi=40)
+    assert (tmp_path / "three" / f"{full_length_page.ONE_AGAINST_TWO}.png").is_file()
     # The two-agent preset on both platforms: its GPU runs against its CPU ones over the same last
     # steps, per policy both ran (UCB) and measure both entries keep.
     [t] = doc["across_platforms"]
@@ -815,7 +821,7 @@ def test_one_agent_against_two_at_the_full_length_on_planted_entries(results, tm
     assert [(r["group"], r["measure"]) for r in t["rows"]] == [(ucb, m) for m in module.AGENT_MEASURES]
     assert t["rows"][0]["cpu"] == low["curiosity"][:3] and t["rows"][0]["gpu"] == high["curiosity"]
     assert t["rows"][0]["diff"] == pytest.approx(np.mean(high["curiosity"]) - np.mean(low["curiosity"][:3]))
-    lines = results._across_platforms(t, {x["sweep"]: x for x in doc["sweeps"]})
+    lines = full_length_page._across_platforms(t, {x["sweep"]: x for x in doc["sweeps"]})
     assert "`multi_agent.long_gpu` on one NVIDIA Z against `multi_agent.long_cpu` on a CPU (X)" in lines[0]
     assert "the table's 3 tests" in lines[0] and lines[4].startswith(f"| {ucb} | curiosity | ")
     assert "across_platforms" not in module.with_one_against_two({"claims": [], "sweeps": [one, few]})
@@ -831,12 +837,12 @@ def test_one_agent_against_two_at_the_full_length_on_planted_entries(results, tm
     assert "committed" not in module.one_against_two([committed(one, {ucb: high}), committed(two, {ucb: low}, 20_000)])[0]
     doc = module.with_one_against_two({"claims": [], "sweeps": [committed(two, {eps: low, ucb: low}),
                                                                 committed(one, {eps: high, ucb: high})]})
-    lines = results._one_against_two(doc["one_against_two"][0], {x["sweep"]: x for x in doc["sweeps"]})
+    lines = full_length_page._one_against_two(doc["one_against_two"][0], {x["sweep"]: x for x in doc["sweeps"]})
     at = lines.index("The same over the committed runs' last 10,000 steps (steps 30,000-40,000): `single_agent` on a "
                      "CPU (Y) against `multi_agent` on a CPU (Y), all their seeds, Holm's correction over the table's "
                      "6 tests:")
     assert lines[at + 4].startswith(f"| {eps} | curiosity | 0.5 (8) | 0.4 (3) | -0.1 |")  # high has 8 runs, low 3
-    assert not any(line.startswith("The same over the committed runs") for line in results._one_against_two(
+    assert not any(line.startswith("The same over the committed runs") for line in full_length_page._one_against_two(
         doc["one_against_two"][0], {x["sweep"]: x for x in doc["sweeps"]}, committed=False))
 
 
