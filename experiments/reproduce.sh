@@ -147,12 +147,14 @@
 # reads the four as one sweep of single_agent:
 #     python -m mjx_curio.sweep preset=single_agent policies=ucb seeds=3 steps=80000 checkpoint_every=2000 out=runs/paper/single_agent.full_length_ucb
 #     python -m mjx_curio.sweep preset=single_agent policies=ucb seeds=3 first_seed=3 steps=80000 checkpoint_every=2000 out=runs/paper/single_agent.full_length_ucb.seeds-3-5
-# and two agents under UCB, seeds 0-2 (claim 3 on one machine: one agent against two on the same
-# CPU), 3 h 21 min over two sessions on the same CPU (the second resumed with resume=true; 22–23
-# run-steps/s alone); full_length_evidence.py keeps it beside the main job as the two-agent
-# preset on a CPU:
+# and two agents under UCB (claim 3 on one machine: one agent against two on the same CPU),
+# seeds 0-2, 3 h 21 min over two sessions on the same CPU (22-23 run-steps/s alone), and seeds
+# 3-5, 3 h 13 min over two sessions (22-24 run-steps/s alone), each second session resumed with
+# resume=true; full_length_evidence.py reads the two as one sweep and keeps it beside the main
+# job as the two-agent preset on a CPU:
 #     python -m mjx_curio.sweep preset=multi_agent policies=ucb seeds=3 steps=80000 checkpoint_every=2000 out=runs/paper/multi_agent.full_length_ucb
-#     python experiments/full_length_evidence.py runs/paper/single_agent.full_length runs/paper/single_agent.full_length.seeds-3-5 runs/paper/single_agent.full_length_ucb runs/paper/single_agent.full_length_ucb.seeds-3-5 runs/paper/multi_agent.full_length_ucb
+#     python -m mjx_curio.sweep preset=multi_agent policies=ucb seeds=3 first_seed=3 steps=80000 checkpoint_every=2000 out=runs/paper/multi_agent.full_length_ucb.seeds-3-5
+#     python experiments/full_length_evidence.py runs/paper/single_agent.full_length runs/paper/single_agent.full_length.seeds-3-5 runs/paper/single_agent.full_length_ucb runs/paper/single_agent.full_length_ucb.seeds-3-5 runs/paper/multi_agent.full_length_ucb runs/paper/multi_agent.full_length_ucb.seeds-3-5
 #
 # The paper's full scale (8 seeds, 80,000 steps, every preset) is a GPU job: install the CUDA
 # extra (pip install -e '.[cuda]') and run
