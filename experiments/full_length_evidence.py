@@ -36,9 +36,10 @@ side by side:
   `results.py page` draws the figures;
 - `one_against_two`: for each one-agent and two-agent entry of the same length, the two set
   against each other over their last 10,000 steps (`one_against_two`), claim 3 at the full
-  length, whose row joins the claims (pairs on one platform first); and the same over their
-  committed runs' last 10,000 steps, where the two sides may share their machines when the
-  full-length sweeps do not;
+  length, whose row joins the claims (pairs on one platform first); each run's change in those
+  measures from the committed runs' last 10,000 steps to its own last 10,000, two agents against
+  one; and the same over their committed runs' last 10,000 steps, where the two sides may share
+  their machines when the full-length sweeps do not;
 - `across_platforms`: for each preset the file holds on a CPU and on a GPU at one length, the two
   entries' runs over their last 10,000 steps, the GPU's against the CPU's (`across_platforms`):
   how far the machine alone moves the measures at the full length.
@@ -289,7 +290,10 @@ def pair_against(one: dict, two: dict) -> dict:
     "rows": [{"group", "measure", "what", "one", "two" (per run), "diff" (two - one), "t", "p",
     "p_holm"}], "committed": where both entries have their committed runs' measures at one length,
     {"one", "two": those sweeps' names, "steps", "rows": the same rows over the last LATE_STEPS of
-    those runs}, "claim": the claims-table row, or None}."""
+    those runs}, "changes": where both entries' `halves` start at one step (`_changes_against`),
+    {"steps": [first, last] of the earlier steps, "rows": each run's change in the measures from
+    those steps to the last LATE_STEPS, two agents against one}, "claim": the claims-table row, or
+    None}."""
     from mjx_curio import analysis as an
     from mjx_curio.analysis.claims import claim_two_agents_higher
     from mjx_curio.analysis.claims.common import ALPHA, _ci, _decide, _f, _p
@@ -317,7 +321,28 @@ def pair_against(one: dict, two: dict) -> dict:
            "late_steps": one["late_steps"], "rows": rows,
            "claim": claim if ucb else None}  # without UCB runs on both sides, the claim is not tested
     committed = _committed_one_against_two(one, two)
-    return {**out, "committed": committed} if committed else out
+    changes = _changes_against(one, two)
+    return {**out, **({"committed": committed} if committed else {}), **({"changes": changes} if changes else {})}
+
+
+def _changes_against(one: dict, two: dict) -> dict | None:
+    """What the second half changes, two agents against one: each run's change in claim 3's
+    measures from the LATE_STEPS before the committed runs' end to the sweep's last LATE_STEPS
+    (`halves`' "second" minus its "first", run by run), Welch's two-sided t-test of two agents'
+    changes against one agent's and Holm's correction over the table's tests. Fig. 24 has two
+    agents' VAE loss failing to converge: here, a smaller fall. None where an entry's `halves` keep
+    no earlier steps or the two entries' earlier steps differ."""
+    if not all("committed" in e and all("first" in h for h in e["halves"]) for e in (one, two)):
+        return None
+    if one["committed"]["steps"] != two["committed"]["steps"]:
+        return None
+
+    def change(e: dict) -> dict:
+        return {(h["group"], h["measure"]): {"what": h["what"], "change": _floats(
+            np.asarray(h["second"], float) - np.asarray(h["first"], float))} for h in e["halves"]}
+
+    end = one["committed"]["steps"]
+    return {"steps": [end - one["late_steps"], end], "rows": _two_against_one(change(one), change(two), "change")}
 
 
 def _two_against_one(one: dict, two: dict, side: str) -> list:

@@ -86,8 +86,9 @@ def _measure_formats() -> dict:
 
 def _one_against_two(a: dict, sweeps: dict, committed: bool = True) -> list[str]:
     """A one-agent sweep against a two-agent one at the full length (a table of `one_against_two` in
-    full_length_evidence.py): claim 3's measures over the last steps, per policy both ran; then,
-    where `committed`, the same over the committed runs."""
+    full_length_evidence.py): claim 3's measures over the last steps, per policy both ran; each
+    run's change in them over the second half, where the file has it; then, where `committed`,
+    the same over the committed runs."""
     one, two = sweeps[a["one"]], sweeps[a["two"]]
     lo, hi = a["steps"] - a["late_steps"], a["steps"]
     n = sum(r["p"] is not None for r in a["rows"])
@@ -103,6 +104,14 @@ def _one_against_two(a: dict, sweeps: dict, committed: bool = True) -> list[str]
         f"{c['steps']:,}): `{c['one']}` on {_device(one['committed']['devices'])} against `{c['two']}` on "
         f"{_device(two['committed']['devices'])}, all their seeds, Holm's correction over the table's "
         f"{sum(r['p'] is not None for r in c['rows'])} tests:", "", *table(c["rows"])]
+    ch = a.get("changes")
+    changes = [] if not ch else [
+        f"What the second half changes, two agents against one: each run's change in the same measures from steps "
+        f"{ch['steps'][0]:,}-{ch['steps'][1]:,} to {lo:,}-{hi:,} (the table of each sweep's halves above, run by "
+        "run), means over seeds (how many in brackets), the difference two agents minus one, Welch's two-sided "
+        f"t-test, and Holm's correction over the table's {sum(r['p'] is not None for r in ch['rows'])} tests; fig. "
+        "24's two-agent VAE loss \"fails to converge\", which would read here as a smaller fall (context, not the "
+        "claim's verdict):", "", *table(ch["rows"])]
     return [f"One agent against two at the full length (claim 3, figs. 23 and 24): `{a['one']}` on "
             f"{_device(one['device'])} against `{a['two']}` on {_device(two['device'])}, the curiosity, the VAE "
             f"loss per image and its reconstruction term over steps {lo:,}-{hi:,}, per policy both ran (the claim's "
@@ -111,7 +120,7 @@ def _one_against_two(a: dict, sweeps: dict, committed: bool = True) -> list[str]
             + ("" if same else "; the two ran on different machines, and each sweep's first table above (and, "
                "where a preset ran on both, its table on both platforms) says how far the machine alone moves "
                "these measures") + ":", "",
-            *table(a["rows"]), *([""] + below if below else [])]
+            *table(a["rows"]), *([""] + changes if changes else []), *([""] + below if below else [])]
 
 
 def _across_platforms(t: dict, sweeps: dict) -> list[str]:

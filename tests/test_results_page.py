@@ -439,6 +439,17 @@ def _check_one_against_two(doc: dict, a: dict, stats):
         short = {w: {(r["group"], r["measure"]): r["short"] for r in by[a[w]]["platforms"]} for w in ("one", "two")}
         _check_two_against_one(c["rows"], short, stats)
         assert [(r["group"], r["measure"]) for r in c["rows"]] == [(r["group"], r["measure"]) for r in a["rows"]]
+    if "changes" in a:  # each run's change over the second half: its entry's late steps minus its earlier ones
+        ch = a["changes"]
+        assert ch["steps"] == [by[a["one"]]["committed"]["steps"] - a["late_steps"], by[a["one"]]["committed"]["steps"]]
+        change = {w: {(h["group"], h["measure"]): [y - x for x, y in zip(h["first"], h["second"])]
+                      for h in by[a[w]]["halves"]} for w in ("one", "two")}
+        for r in ch["rows"]:
+            for w in ("one", "two"):
+                assert r[w] == pytest.approx(change[w][(r["group"], r["measure"])], rel=1e-12)
+                change[w][(r["group"], r["measure"])] = r[w]  # the rounding of the JSON's floats aside
+        _check_two_against_one(ch["rows"], change, stats)
+        assert [(r["group"], r["measure"]) for r in ch["rows"]] == [(r["group"], r["measure"]) for r in a["rows"]]
     ucb = [r for r in a["rows"] if r["group"].startswith("UCB") and r["measure"] in ("curiosity", "vae_loss")]
     [row] = [r for r in doc["claims"] if r["claim"] == "3" and r["on"] == a["on"][::-1]] if ucb else [None]
     if ucb:
@@ -844,6 +855,35 @@ def test_one_agent_against_two_at_the_full_length_on_planted_entries(full_length
     assert lines[at + 4].startswith(f"| {eps} | curiosity | 0.5 (8) | 0.4 (3) | -0.1 |")  # high has 8 runs, low 3
     assert not any(line.startswith("The same over the committed runs") for line in full_length_page._one_against_two(
         doc["one_against_two"][0], {x["sweep"]: x for x in doc["sweeps"]}, committed=False))
+    assert not any(line.startswith("What the second half changes") for line in lines)  # no earlier steps kept
+    # Where both entries keep each run's measures over the committed runs' last steps too, each
+    # run's change over the second half, two agents against one: planted, run i of one agent's
+    # VAE loss falls by 10 + 0.2 i and of two agents' by 4 + 0.2 i, every other measure by 0.2 i.
+    stats = pytest.importorskip("scipy.stats")
+
+    def halved(e, fall):
+        return {**committed(e, {}), "halves": [{**h, "first": [v + fall.get(h["measure"], 0) + 0.2 * i
+                                                               for i, v in enumerate(h["second"])]} for h in e["halves"]]}
+    doc = module.with_one_against_two({"claims": [], "sweeps": [halved(two, {"vae_loss": 4}), halved(one, {"vae_loss": 10})]})
+    ch = doc["one_against_two"][0]["changes"]
+    assert ch["steps"] == [30_000, 40_000]
+    falls = lambda n, by: {(g, m): [-(by.get(m, 0) + 0.2 * i) for i in range(n)]  # noqa: E731
+                           for g in (eps, ucb) for m in module.AGENT_MEASURES}
+    want = {"one": falls(3, {"vae_loss": 10}), "two": falls(8, {"vae_loss": 4})}
+    for r in ch["rows"]:
+        for w in ("one", "two"):
+            assert r[w] == pytest.approx(want[w][(r["group"], r["measure"])])
+            want[w][(r["group"], r["measure"])] = r[w]  # to the last bit, for the tests' check
+    _check_two_against_one(ch["rows"], want, stats)
+    [loss] = [r for r in ch["rows"] if r["group"] == ucb and r["measure"] == "vae_loss"]
+    assert loss["diff"] == pytest.approx(-4.7 + 10.2) and loss["p"] < 1e-6
+    lines = full_length_page._one_against_two(doc["one_against_two"][0], {x["sweep"]: x for x in doc["sweeps"]})
+    at = next(i for i, line in enumerate(lines) if line.startswith("What the second half changes"))
+    assert "from steps 30,000-40,000 to 70,000-80,000" in lines[at] and "the table's 6 tests" in lines[at]
+    assert f"| {ucb} | vae_loss | -10.2 (3) | -4.7 (8) | +5.5 | {full_length_page._p(loss['p'])} " \
+           f"| {full_length_page._p(loss['p_holm'])} |" in lines[at + 2:at + 10]
+    other = {**halved(two, {}), "committed": {"sweep": "multi_agent", "steps": 20_000, "devices": []}}
+    assert "changes" not in module.one_against_two([halved(one, {}), other])[0]  # earlier steps that differ
 
 
 # ---------------------------------------------------------------------- snapshots of tiny sweeps
