@@ -19,8 +19,9 @@ given this time, so that sweeps measured on different machines, or in different 
 side by side:
 
 - `claims`: the paper's claims that each given sweep can test by itself (`analysis.claims_table`
-  on it alone), at its full length, each row with the presets it was computed from (`presets`)
-  and the platform of each (`on`);
+  on it alone), at its full length, and claim 14 of a one-agent and a two-agent sweep given
+  together on one platform, each row with the presets it was computed from (`presets`) and the
+  platform of each (`on`);
 - `platforms`: the sweep against the committed CPU runs over the steps both ran, policy by policy
   (`analysis.walls_measures`: late curiosity, the VAE loss per image and its reconstruction term
   over the last 10,000 of those steps, object contacts per 1,000 agent-steps over all of them);
@@ -208,8 +209,13 @@ def entry_key(e: dict) -> tuple[str, str]:
     return e["preset"], e.get("platform") or platform_of(e["device"])
 
 
+AGENT_MEASURES = ("curiosity", "vae_loss", "recon")  # claim 3's two, and the loss's reconstruction term
+ONE, TWO = "single_agent", "multi_agent"
+
+
 def evidence(longs: dict, committed: dict) -> dict:
     """{"claims": the claims each sweep of `longs` ({(preset, platform): sweep}) can test by itself,
+    and claim 14 of each one-agent and two-agent sweep of one length on one platform (`vae_unsettled`),
     "sweeps": `sweep_evidence` of each against `committed`'s ({preset: sweep}) sweep of its preset}."""
     from mjx_curio import analysis as an
 
@@ -220,8 +226,28 @@ def evidence(longs: dict, committed: dict) -> dict:
     return {"claims": [{"claim": r[0], "text": r[1], "statistic": r[3], "verdict": r[4], "presets": [preset],
                         "on": [platform]}
                        for preset, platform in keys for r in an.claims_table({preset: longs[preset, platform]}).rows
-                       if not r[4].startswith("not testable")],
+                       if not r[4].startswith("not testable")] + vae_unsettled(longs),
             "sweeps": [sweep_evidence(p, longs[p, pl], committed[p]) for p, pl in keys]}
+
+
+def vae_unsettled(longs: dict) -> list[dict]:
+    """Claim 14 (the two-agent VAE's loss stays volatile where one agent's settles, fig. 24) of each
+    one-agent and two-agent sweep of `longs` ({(preset, platform): sweep}) of one length on one
+    platform, over the second half of their steps: the claims table's test, which needs each run's
+    VAE loss over those steps, so only sweeps reduced together (the file keeps their last steps'
+    means, not the losses' course). Rows as `evidence`'s, with both presets and platforms."""
+    from mjx_curio.analysis.claims import claim_two_agent_vae_unsettled
+
+    rows = []
+    for platform in sorted({pl for _, pl in longs}):
+        one, two = longs.get((ONE, platform)), longs.get((TWO, platform))
+        if one is None or two is None or one.steps_done != two.steps_done:
+            continue
+        r = claim_two_agent_vae_unsettled({ONE: one, TWO: two})
+        if not r.verdict.startswith("not testable"):
+            rows.append({"claim": r.key, "text": r.claim, "statistic": r.statistic, "verdict": r.verdict,
+                         "presets": [TWO, ONE], "on": [platform, platform]})
+    return rows
 
 
 def _claim_order(claim: str) -> tuple[int, str]:
@@ -255,10 +281,6 @@ def merged(old: dict | None, new: dict) -> dict:
 def _in_order(claims: list) -> list:
     """Claims rows in the claims table's order, a claim's rows in the order of their entries."""
     return sorted(claims, key=lambda r: (_claim_order(r["claim"]), r["presets"], r.get("on", [])))
-
-
-AGENT_MEASURES = ("curiosity", "vae_loss", "recon")  # claim 3's two, and the loss's reconstruction term
-ONE, TWO = "single_agent", "multi_agent"
 
 
 def one_against_two(sweeps: list) -> list[dict]:

@@ -47,8 +47,9 @@ def full_length_block(path: pathlib.Path = FULL_LENGTH) -> str:
     names = ", ".join(f"`{x['sweep']}` ({x['preset']}, {x['steps']:,} steps on {_device(x['device'])})"
                       for x in e["sweeps"])
     several = len(e["sweeps"]) > 1
-    together = (", and claim 3 each one-agent and two-agent sweep of one length together"
-                if any(len(r.get("presets", [])) > 1 for r in e["claims"]) else "")
+    joint = {r["claim"] for r in e["claims"] if len(r.get("presets", [])) > 1}
+    together = (", and claim 3 each one-agent and two-agent sweep of one length together" if joint else "") + (
+        " (claim 14 those that ran on one platform, from their VAE losses' course)" if "14" in joint else "")
     lines = [f"The claims that {'each of ' if several else ''}the full-length sweep{'s' if several else ''} {names} "
              f"can test by itself{together} (the claims table above has them at the committed runs' length):", "",
              "| # | claim | our statistic | verdict |", "|---|---|---|---|"]

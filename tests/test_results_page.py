@@ -541,6 +541,28 @@ def test_full_length_evidence_on_the_tiny_sweep(full_length_page, tiny_sweep, ti
     assert full_length_page.full_length_block(tmp_path / "missing.json").startswith("No sweep of the paper's full length")
 
 
+def test_claim_14_of_one_and_two_agents_reduced_together_on_one_platform(tiny_sweep, tiny_single_sweep, tmp_path,
+                                                                         monkeypatch):
+    """Claim 14 needs each run's VAE loss over the second half, which the file does not keep: the
+    reduction tests it on a one-agent and a two-agent sweep given together, of one length, on one
+    platform, as the claims table tests the same pair."""
+    from mjx_curio.analysis.claims import curiosity
+
+    module = _full_length_module()
+    one, two = an.load(tiny_single_sweep), an.load(tiny_sweep)
+    both = {("single_agent", "cpu"): one, ("multi_agent", "cpu"): two}
+    assert module.vae_unsettled(both) == []  # 200 steps and 1-2 seeds: not testable at this scale
+    monkeypatch.setattr(curiosity, "_scale_gaps", lambda items: None)
+    [row] = module.vae_unsettled(both)
+    [want] = [r for r in an.claims_table({"single_agent": one, "multi_agent": two}).rows if r[0] == "14"]
+    assert (row["claim"], row["text"], row["statistic"], row["verdict"]) == (want[0], want[1], want[3], want[4])
+    assert (row["presets"], row["on"]) == (["multi_agent", "single_agent"], ["cpu", "cpu"])
+    assert module.vae_unsettled({("single_agent", "cpu"): one, ("multi_agent", "gpu"): two}) == []
+    half = an.load(_copy_sweep(tiny_sweep, tmp_path / "half", windows_done=two.metrics["curiosity"].shape[1] // 2))
+    assert module.vae_unsettled({("single_agent", "cpu"): one, ("multi_agent", "cpu"): half}) == []
+    assert module.vae_unsettled({("multi_agent", "cpu"): two}) == []
+
+
 def test_full_length_evidence_sets_fewer_runs_beside_all_the_committed_ones(full_length_page, tiny_sweep, tmp_path, monkeypatch):
     """A full-length sweep of some of the committed policies and seeds (on a CPU, fig. 8's
     ε-greedy runs alone) is compared with every committed run of its settings; one with a run the
