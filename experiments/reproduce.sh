@@ -154,7 +154,11 @@
 # job as the two-agent preset on a CPU:
 #     python -m mjx_curio.sweep preset=multi_agent policies=ucb seeds=3 steps=80000 checkpoint_every=2000 out=runs/paper/multi_agent.full_length_ucb
 #     python -m mjx_curio.sweep preset=multi_agent policies=ucb seeds=3 first_seed=3 steps=80000 checkpoint_every=2000 out=runs/paper/multi_agent.full_length_ucb.seeds-3-5
-#     python experiments/full_length_evidence.py runs/paper/single_agent.full_length runs/paper/single_agent.full_length.seeds-3-5 runs/paper/single_agent.full_length_ucb runs/paper/single_agent.full_length_ucb.seeds-3-5 runs/paper/multi_agent.full_length_ucb runs/paper/multi_agent.full_length_ucb.seeds-3-5
+# and two agents under epsilon-greedy (claim 3 under that policy on one machine), seeds 0-2, 3 h
+# 12 min over two sessions on the same CPU (23-24 run-steps/s alone; the second resumed with
+# resume=true), which full_length_evidence.py reads with the two UCB sweeps as one:
+#     python -m mjx_curio.sweep preset=multi_agent policies=eps seeds=3 steps=80000 checkpoint_every=2000 out=runs/paper/multi_agent.full_length
+#     python experiments/full_length_evidence.py runs/paper/single_agent.full_length runs/paper/single_agent.full_length.seeds-3-5 runs/paper/single_agent.full_length_ucb runs/paper/single_agent.full_length_ucb.seeds-3-5 runs/paper/multi_agent.full_length_ucb runs/paper/multi_agent.full_length_ucb.seeds-3-5 runs/paper/multi_agent.full_length
 #
 # The paper's full scale (8 seeds, 80,000 steps, every preset) is a GPU job: install the CUDA
 # extra (pip install -e '.[cuda]') and run
