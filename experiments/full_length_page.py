@@ -60,13 +60,9 @@ def full_length_block(path: pathlib.Path = FULL_LENGTH) -> str:
         lines += ["", *_full_length_sweep(x)]
     for t in e.get("across_platforms", []):
         lines += ["", *_across_platforms(t, {x["sweep"]: x for x in e["sweeps"]})]
-    shown = set()  # the committed runs' table once: every pair of the same two presets shares it
-    for a in e.get("one_against_two", []):
-        c = a.get("committed")
-        seen = c is not None and (c["one"], c["two"], c["steps"]) in shown
-        lines += ["", *_one_against_two(a, {x["sweep"]: x for x in e["sweeps"]}, committed=not seen)]
-        if c is not None:
-            shown.add((c["one"], c["two"], c["steps"]))
+    pairs = e.get("one_against_two", [])
+    for a, show in zip(pairs, _committed_shown(pairs)):
+        lines += ["", *_one_against_two(a, {x["sweep"]: x for x in e["sweeps"]}, committed=show)]
     if e.get("one_against_two"):
         ones, twos = _one_against_two_styles(e["one_against_two"])
         said = lambda sides: "; ".join(f"`{name}`, {STYLE_WORDS[style]}" for name, style in sides)  # noqa: E731
@@ -83,6 +79,19 @@ def _measure_formats() -> dict:
     from mjx_curio.analysis.walls import MEASURES
 
     return {key: fmt for key, _, fmt in MEASURES}
+
+
+def _committed_shown(pairs: list) -> list[bool]:
+    """Whether each one-against-two pair sets out its table of the committed runs: once for pairs
+    that share it (the same two presets, length, policies and measures), again for a pair whose
+    full-length sweeps ran other policies, as its committed runs' rows differ."""
+    shown, out = set(), []
+    for a in pairs:
+        c = a.get("committed")
+        key = c and (c["one"], c["two"], c["steps"], tuple((r["group"], r["measure"]) for r in c["rows"]))
+        out.append(key not in shown)
+        shown.add(key)
+    return out
 
 
 def _one_against_two(a: dict, sweeps: dict, committed: bool = True) -> list[str]:

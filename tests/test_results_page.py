@@ -868,6 +868,13 @@ def test_one_agent_against_two_at_the_full_length_on_planted_entries(full_length
     assert [(r["group"], r["measure"]) for r in c["rows"]] == [(r["group"], r["measure"]) for r in a["rows"]]
     assert c["rows"][0]["one"] == high["curiosity"] and c["rows"][0]["diff"] == pytest.approx(-0.1)
     assert "committed" not in module.one_against_two([committed(one, {ucb: high}), committed(two, {ucb: low}, 20_000)])[0]
+    # The page sets out the committed runs' table once for pairs that share it, and again for a
+    # pair whose two-agent sweep ran fewer policies (its table has other rows).
+    ucb_only = module.one_against_two([committed(one, {eps: high, ucb: high}), committed(two, {ucb: low})])
+    both = module.one_against_two([committed(one, {eps: high, ucb: high}), committed(two, {eps: low, ucb: low})])
+    assert [r["group"] for r in ucb_only[0]["committed"]["rows"]] == [ucb] * len(module.AGENT_MEASURES)
+    assert full_length_page._committed_shown(ucb_only + both) == [True, True]
+    assert full_length_page._committed_shown(both + both) == [True, False]
     doc = module.with_one_against_two({"claims": [], "sweeps": [committed(two, {eps: low, ucb: low}),
                                                                 committed(one, {eps: high, ucb: high})]})
     lines = full_length_page._one_against_two(doc["one_against_two"][0], {x["sweep"]: x for x in doc["sweeps"]})
