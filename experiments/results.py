@@ -22,7 +22,8 @@ numbers the paper reads off its figures beside ours (`analysis.paper_numbers_tab
 column for the full-length sweeps) and the curiosity from a zero memory carry (from
 docs/results/history.json, which `history_evidence.py` writes) and from the authors' memory
 (docs/results/authors_memory.json, which `authors_memory_evidence.py` writes), fig. 8's and fig.
-17's settings with the authors' VAE layers beside Ha and Schmidhuber's, and fig. 8's run again
+17's settings with the authors' VAE layers beside Ha and Schmidhuber's (the side experiments' own
+runs of the default layers, and every seed of the figure's experiment), and fig. 8's run again
 beside its first run (`analysis.readings_side_by_side`), the seeds each claim's tests need (`analysis.power_table`), claim 1's fall and rise taken apart
 into the world model's error and the posterior's spread (`analysis.curiosity_parts_table`), the
 Boltzmann temperatures measure by measure (`analysis.temperature_table`), different walls against identical ones
@@ -391,21 +392,43 @@ def authors_memory_block(path: pathlib.Path = AUTHORS_MEMORY) -> str:
                                                       "memory yet (`experiments/authors_memory_evidence.py`).\n")
 
 
-# A figure's setting twice on the same seeds, one thing apart: page block -> the two sweeps, their
-# labels, what the second one is and the figure whose setting both run. The one-agent rerun of
+@dataclasses.dataclass(frozen=True)
+class SideBySide:
+    """Two sweeps of a figure's setting, one thing apart, as a page block: the sweeps, their labels,
+    what the second one is, the figure whose setting both run, and whether to show only the
+    measures both record (`analysis.readings_side_by_side`)."""
+
+    names: tuple[str, str]
+    labels: tuple[str, str]
+    what: str
+    figure: str
+    shared_only: bool = False
+
+
+# A figure's setting twice, one thing apart: page block -> `SideBySide`. The side experiments run
+# on the seeds of a default-layers sweep that records the posterior spread; the one-agent rerun of
 # fig. 8 (a later build, so a chaotically different but equally likely trajectory per seed)
 # records the training batches' curiosity, which the first predates, so it is the default layers'
-# side against the authors'.
+# side against the authors'. The `_every_seed` blocks set the authors' layers against every seed of
+# the figure's own experiment, the default layers' largest sample, which records the curiosity alone.
 SIDE_BY_SIDE = {
-    "vae_layers": (("single_agent.batch_curiosity", "single_agent.authors_vae"),
-                   ("Ha & Schmidhuber's layers", "the authors' layers"),
-                   "the side experiment with the authors' VAE layers", "fig. 8"),
-    "rerun": (("single_agent.spread", "single_agent.batch_curiosity"),
-              ("the first run", "the rerun"),
-              "fig. 8's setting run again", "fig. 8"),
-    "vae_layers_two_agents": (("multi_agent.spread", "multi_agent.authors_vae"),
-                              ("Ha & Schmidhuber's layers", "the authors' layers"),
-                              "the two-agent side experiment with the authors' VAE layers", "fig. 17"),
+    "vae_layers": SideBySide(("single_agent.batch_curiosity", "single_agent.authors_vae"),
+                             ("Ha & Schmidhuber's layers", "the authors' layers"),
+                             "the side experiment with the authors' VAE layers", "fig. 8"),
+    "rerun": SideBySide(("single_agent.spread", "single_agent.batch_curiosity"),
+                        ("the first run", "the rerun"),
+                        "fig. 8's setting run again", "fig. 8"),
+    "vae_layers_every_seed": SideBySide(("single_agent", "single_agent.authors_vae"),
+                                        ("Ha & Schmidhuber's layers (all seeds)", "the authors' layers"),
+                                        "the authors' VAE layers against every seed of fig. 8's experiment",
+                                        "fig. 8", shared_only=True),
+    "vae_layers_two_agents": SideBySide(("multi_agent.spread", "multi_agent.authors_vae"),
+                                        ("Ha & Schmidhuber's layers", "the authors' layers"),
+                                        "the two-agent side experiment with the authors' VAE layers", "fig. 17"),
+    "vae_layers_two_agents_every_seed": SideBySide(("multi_agent", "multi_agent.authors_vae"),
+                                                   ("Ha & Schmidhuber's layers (all seeds)", "the authors' layers"),
+                                                   "the authors' VAE layers against every seed of fig. 17's experiment",
+                                                   "fig. 17", shared_only=True),
 }
 
 
@@ -414,12 +437,13 @@ def side_by_side_block(presets: dict, block: str) -> str:
     or which sweep is still missing."""
     from mjx_curio import analysis as an
 
-    names, labels, what, figure = SIDE_BY_SIDE[block]
-    missing = [name for name in names if name not in presets]
+    pair = SIDE_BY_SIDE[block]
+    missing = [name for name in pair.names if name not in presets]
     if missing:
-        return (f"{what[0].upper()}{what[1:]} ({names[1]}, beside {names[0]}): {', '.join(missing)} "
-                "has not been snapshotted yet.\n")
-    return an.readings_side_by_side(*(presets[name] for name in names), labels, figure).to_markdown()
+        return (f"{pair.what[0].upper()}{pair.what[1:]} ({pair.names[1]}, beside {pair.names[0]}): "
+                f"{', '.join(missing)} has not been snapshotted yet.\n")
+    return an.readings_side_by_side(*(presets[name] for name in pair.names), pair.labels, pair.figure,
+                                    shared_only=pair.shared_only).to_markdown()
 
 
 

@@ -209,3 +209,24 @@ def test_side_by_side_shows_the_training_batches_curiosity_where_a_sweep_records
     assert all(r[5] != "—" for r in both.rows if r[1] == "training batches' curiosity")
     del b.metrics["batch_curiosity"]
     assert all(r[1] != "training batches' curiosity" for r in pn.readings_side_by_side(a, b, ("A", "B")).rows)
+
+
+def test_side_by_side_shared_only_keeps_the_measures_both_sweeps_record():
+    """Against a sweep that records the curiosity alone, `shared_only` drops the other's posterior
+    spread and training batches' curiosity (and the note on the spread); the curiosity rows, their
+    numbers included, are those of the full table."""
+    a = fake_sweep("a", 1, [("eps", 0.2)], 300, seeds=3)
+    b = fake_sweep("b", 1, [("eps", 0.2)], 300, seeds=3)
+    for name in ("curiosity_spread", "batch_curiosity"):
+        del a.metrics[name]  # made before either was recorded
+    rng = np.random.default_rng(2)
+    for s in (a, b):
+        s.metrics["curiosity"][:] = (0.5 + 0.05 * rng.standard_normal(3))[:, None, None]
+    full = pn.readings_side_by_side(a, b, ("A", "B"))
+    shared = pn.readings_side_by_side(a, b, ("A", "B"), shared_only=True)
+    assert {r[1] for r in full.rows} == {"curiosity", "posterior spread", "training batches' curiosity"}
+    assert {r[1] for r in shared.rows} == {"curiosity"}
+    assert shared.rows == [r for r in full.rows if r[1] == "curiosity"]
+    assert "posterior spread is" in full.note and "posterior spread is" not in shared.note
+    both = pn.readings_side_by_side(b, b, ("B", "B again"), shared_only=True)
+    assert {r[1] for r in both.rows} == {"curiosity", "posterior spread", "training batches' curiosity"}

@@ -48,7 +48,8 @@ def test_the_page_is_what_the_committed_metrics_give(results):
     page = results.PAGE.read_text()
     blocks = results.blocks(page)
     assert set(blocks) == {"scale", "figures", "claims", "paper_numbers", "history", "authors_memory", "vae_layers",
-                           "rerun", "vae_layers_two_agents", "power", "curiosity_parts", "temperatures", "walls",
+                           "rerun", "vae_layers_every_seed", "vae_layers_two_agents",
+                           "vae_layers_two_agents_every_seed", "power", "curiosity_parts", "temperatures", "walls",
                            "reconstructions", "full_length"}
     assert blocks["figures"] == results.figures_block(presets, out=None)
     if presets:  # the CSV's full-precision numbers may differ in the last bit on another CPU's NumPy
@@ -1231,11 +1232,13 @@ def test_reproduce_seeds_sets_every_experiment_and_each_experiments_own_knob_win
     assert ".seeds-" not in done.stdout.replace("single_agent.seeds-", "")
 
 
-@pytest.mark.parametrize("block", ["vae_layers", "rerun", "vae_layers_two_agents"])
+@pytest.mark.parametrize("block", ["vae_layers", "rerun", "vae_layers_every_seed", "vae_layers_two_agents",
+                                   "vae_layers_two_agents_every_seed"])
 def test_a_side_by_side_block_sets_its_two_sweeps_beside_each_other_or_says_what_is_missing(results, block):
     from test_claims import fake_sweep
 
-    names, labels, _, figure = results.SIDE_BY_SIDE[block]
+    pair = results.SIDE_BY_SIDE[block]
+    names, labels, figure = pair.names, pair.labels, pair.figure
     agents = 1 if figure == "fig. 8" else 2
     a, b = (fake_sweep(name, agents, [("eps", 0.2)], 300, seeds=2) for name in names)
     assert f"{names[1]} has not been snapshotted yet" in results.side_by_side_block({names[0]: a}, block)

@@ -243,7 +243,8 @@ def paper_numbers_table(sweeps, full_length: Mapping[str, tuple[Mapping, Mapping
     return Table(cols, rows, values, note)
 
 
-def readings_side_by_side(a: Sweep, b: Sweep, labels: tuple[str, str], figure: str = "fig. 8") -> Table:
+def readings_side_by_side(a: Sweep, b: Sweep, labels: tuple[str, str], figure: str = "fig. 8",
+                          shared_only: bool = False) -> Table:
     """Two sweeps of one figure's setting that differ in one setting (e.g. the VAE's layers),
     beside the paper's curiosity levels for that figure: per level reading of `READINGS` that both
     sweeps reach, in the window where the paper's curve is lowest (its `lowest` reading's box)
@@ -253,7 +254,9 @@ def readings_side_by_side(a: Sweep, b: Sweep, labels: tuple[str, str], figure: s
     the window's 1,000-step bins; mean over the runs of the figure's policy [95 % CI], and b minus
     a (Welch: [95 % CI], p) where both have it. Where the paper reads the figure's lowest point,
     also each run's lowest 1,000-step bin after the first, over the steps both ran, and the bin's
-    middle step, as `paper_numbers_table` reads them. `labels` name a and b."""
+    middle step, as `paper_numbers_table` reads them. `labels` name a and b. `shared_only`: only
+    the measures both sweeps record (set against a sweep that records the curiosity alone, the
+    other's further measures would repeat a table that has them on both sides)."""
     from mjx_curio.analysis.significance import t_critical, welch_t
 
     readings = [r for r in READINGS if r.figure == figure and r.measure in ("level", "end")]
@@ -278,7 +281,8 @@ def readings_side_by_side(a: Sweep, b: Sweep, labels: tuple[str, str], figure: s
     windows.append((f"curiosity, steps {last - END_STEPS:,}-{last:,} (the last both ran)", "—", last - END_STEPS, last))
     metrics = [("curiosity", "curiosity"), ("curiosity_spread", "posterior spread"),
                ("batch_curiosity", "training batches' curiosity")]
-    metrics = [(m, name) for m, name in metrics if m in a.metrics or m in b.metrics]
+    metrics = [(m, name) for m, name in metrics
+               if (all if shared_only else any)(m in s.metrics for s in (a, b))]
 
     def per_run(s: Sweep, metric: str, start: int, end: int) -> np.ndarray | None:
         if metric not in s.metrics:
@@ -331,8 +335,10 @@ def readings_side_by_side(a: Sweep, b: Sweep, labels: tuple[str, str], figure: s
                     _lowest_step_cell, ",.0f")
     note = (f"{figure}'s setting ({POLICY_LABELS[policy]}): {labels[0]} is {a.name} ({len(groups[a.name].indices)} "
             f"runs, {a.steps_done:,} steps), {labels[1]} {b.name} ({len(groups[b.name].indices)} runs, "
-            f"{b.steps_done:,} steps). The posterior spread is the part of the curiosity that sampling the next "
-            f"view's latent adds (its expectation), the rest is the memory's error against the posterior mean.")
+            f"{b.steps_done:,} steps).")
+    if any(m == "curiosity_spread" for m, _ in metrics):
+        note += (" The posterior spread is the part of the curiosity that sampling the next view's latent adds (its "
+                 "expectation), the rest is the memory's error against the posterior mean.")
     if lows:
         note += (f" The lowest bin: each run's lowest {BIN_STEPS:,}-step bin of curiosity after the first, over the "
                  "steps both ran, and that bin's middle step.")
