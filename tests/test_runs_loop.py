@@ -1,5 +1,10 @@
 """runs_loop=vmap: per-run convolution kernels compute as batched matmuls (no grouped
-convolutions in the program), and a batched sweep agrees with the one-run-at-a-time one."""
+convolutions in the program), and a batched sweep agrees with the one-run-at-a-time one. With
+either runs loop a chunk of steps is one program that never calls back into Python or
+exchanges data with the host (no callback, infeed, outfeed, send or recv): a sweep's Python waits
+on the device only between chunks. (XLA's own runtime may still read a loop's predicate back
+between iterations on a GPU, for loops whose trip count depends on the data, as MJX's solver's
+does; that is no op of the program.)"""
 
 import mjx_curio  # noqa: F401  (XLA flags before JAX initialises)
 
@@ -56,6 +61,26 @@ def test_vmapped_learner_update_has_no_grouped_convolution():
     assert set(group_counts(hlo)) <= {1}, "a convolution of the vmapped update is grouped"
 
 
+# What in a lowered program makes the device wait on the host: a Python callback (jax.debug,
+# pure_callback, io_callback: a custom call to the runtime's callback target) or a transfer op.
+HOST_OPS = re.compile(r"custom_call @(\w*callback\w*)|stablehlo\.(infeed|outfeed|send|recv)\b")
+
+
+def host_ops(hlo: str) -> list[str]:
+    """The ops of StableHLO text that wait on the host (`HOST_OPS`), by name."""
+    return sorted({a or b for a, b in HOST_OPS.findall(hlo)})
+
+
+def test_host_ops_sees_callbacks():
+    # the check below is only as good as its parser: a debug print and a pure callback must show
+    def f(x):
+        jax.debug.callback(lambda v: None, x)
+        return jax.pure_callback(lambda v: v, jax.ShapeDtypeStruct(x.shape, x.dtype), x)
+
+    assert host_ops(jax.jit(f).lower(jnp.zeros(3)).as_text())
+    assert host_ops(jax.jit(lambda x: x + 1).lower(jnp.zeros(3)).as_text()) == []
+
+
 def _policies():
     # eps-greedy and Boltzmann: two runs that act differently from the first step
     return jax.tree.map(lambda *xs: jnp.stack(xs), policies.make_policy_params(0, 0.2, 1.5, 1.0),
@@ -95,3 +120,16 @@ def test_vmap_sweep_equals_map_sweep_over_a_short_horizon():
             np.testing.assert_allclose(a, b, rtol=1e-4, atol=1e-6, err_msg=name)
         else:  # frames, actions, counts, contacts, keys, replay slots: exactly
             np.testing.assert_array_equal(a, b, err_msg=name)
+
+
+@pytest.mark.parametrize("runs_loop", ["vmap", "map"])
+def test_a_sweep_chunk_never_waits_on_the_host(runs_loop):
+    """The chunk program of a sweep of two runs, lowered (not compiled: a few seconds), holds no op
+    that waits on the host (`host_ops`): the whole chunk of steps, learner updates included, runs
+    without Python."""
+    keys = jnp.asarray(np.stack([run_lib.key_for_seed(s) for s in (0, 1)]))
+    cfg = dataclasses.replace(CFG, runs_loop=runs_loop)
+    states = jax.eval_shape(functools.partial(run_lib.init_runs, cfg), keys, _policies())
+    hlo = jax.jit(functools.partial(run_lib.sweep_chunk, cfg, n_steps=STEPS)).lower(states).as_text()
+    assert "while" in hlo  # the lowered chunk holds its loop over steps
+    assert host_ops(hlo) == []
