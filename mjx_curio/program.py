@@ -43,11 +43,16 @@ class SweepProgram:
         shapes = jax.eval_shape(self._init, *self.inputs)
         return jax.tree.map(lambda s: jax.ShapeDtypeStruct(s.shape, s.dtype, sharding=self.sharding), shapes)
 
+    def lower(self, states):
+        """The chunk program traced for `states` (arrays, or `abstract()`'s shapes) and lowered, not
+        compiled: its StableHLO (`.as_text()`) is what the device will run."""
+        return self._chunk.lower(states)
+
     def compile(self, states) -> None:
         """Trace and compile the chunk program for `states` now (or load it from the compilation
         cache); chunk() then runs that executable. Lets a benchmark time compiling apart from
         running: a first chunk is no steady one (its replay is filling, so it trains less)."""
-        self._chunk = self._chunk.lower(states).compile()
+        self._chunk = self.lower(states).compile()
 
     def chunk(self, states):
         return self._chunk(states)

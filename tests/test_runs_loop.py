@@ -123,13 +123,19 @@ def test_vmap_sweep_equals_map_sweep_over_a_short_horizon():
 
 
 @pytest.mark.parametrize("runs_loop", ["vmap", "map"])
-def test_a_sweep_chunk_never_waits_on_the_host(runs_loop):
-    """The chunk program of a sweep of two runs, lowered (not compiled: a few seconds), holds no op
-    that waits on the host (`host_ops`): the whole chunk of steps, learner updates included, runs
-    without Python."""
-    keys = jnp.asarray(np.stack([run_lib.key_for_seed(s) for s in (0, 1)]))
-    cfg = dataclasses.replace(CFG, runs_loop=runs_loop)
-    states = jax.eval_shape(functools.partial(run_lib.init_runs, cfg), keys, _policies())
-    hlo = jax.jit(functools.partial(run_lib.sweep_chunk, cfg, n_steps=STEPS)).lower(states).as_text()
+def test_a_sweep_chunk_never_waits_on_the_host(runs_loop, tmp_path):
+    """The chunk program the sweep runs (`program.SweepProgram`, the tiny sweep's 8 runs, a chunk of
+    100 steps), lowered, not compiled (a few seconds), holds no op that waits on the host
+    (`host_ops`): the whole chunk of steps, learner updates included, runs without Python."""
+    from conftest import TINY_SWEEP
+    from mjx_curio import cli
+    from mjx_curio import plan as plan_lib
+    from mjx_curio import sweep as sweep_lib
+    from mjx_curio.program import SweepProgram
+
+    p = plan_lib.plan(cli.parse([*TINY_SWEEP, f"out={tmp_path / 'unused'}"], sweep_lib.KEYS))
+    cfg = dataclasses.replace(p.run, runs_loop=runs_loop)
+    program = SweepProgram(cfg, p.runs, -len(p.runs) % len(jax.devices()), p.values["chunk"])
+    hlo = program.lower(program.abstract()).as_text()
     assert "while" in hlo  # the lowered chunk holds its loop over steps
     assert host_ops(hlo) == []
