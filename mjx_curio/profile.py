@@ -332,7 +332,7 @@ def profile(args: dict, time_fn) -> dict:
         program = SweepProgram(rc, main_job_runs(n_runs, args["seed"]), -n_runs % len(jax.devices()), ue)
         states = jax.block_until_ready(program.init())
         t0, c0 = time.perf_counter(), time.process_time()
-        traced = program._chunk.trace(states)  # the sweep's jitted chunk, compiled once, here
+        traced = program._jitted_chunk.trace(states)  # the sweep's jitted chunk, compiled once, here
         chunk = traced.lower().compile()
         compile_s, compile_cpu_s = time.perf_counter() - t0, time.process_time() - c0
         # Warm up until the replay holds a whole sequence, so the timed chunks do train (before

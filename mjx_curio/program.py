@@ -22,7 +22,8 @@ class SweepProgram:
         from mjx_curio import run as run_lib
 
         self.cfg, self.chunk_steps = cfg, chunk
-        self._init, self._chunk, self.sharding = _compiled(cfg, chunk, tuple(jax.devices()))
+        self._init, self._jitted_chunk, self.sharding = _compiled(cfg, chunk, tuple(jax.devices()))
+        self._chunk = self._jitted_chunk  # compile() replaces it with the compiled executable
         padded = list(runs) + [runs[0]] * n_pad
         keys = np.stack([run_lib.key_for_seed(r.seed) for r in padded])
         pol = [policies.make_policy_params(POLICY_IDS[r.policy], r.eps, r.temperature, r.ucb_c) for r in padded]
@@ -45,8 +46,9 @@ class SweepProgram:
 
     def lower(self, states):
         """The chunk program traced for `states` (arrays, or `abstract()`'s shapes) and lowered, not
-        compiled: its StableHLO (`.as_text()`) is what the device will run."""
-        return self._chunk.lower(states)
+        compiled: its StableHLO (`.as_text()`) is what the device will run. Works before and after
+        compile()."""
+        return self._jitted_chunk.lower(states)
 
     def compile(self, states) -> None:
         """Trace and compile the chunk program for `states` now (or load it from the compilation
